@@ -1,0 +1,5 @@
+import sys
+
+from pnrotor.cli import main
+
+sys.exit(main())

@@ -1,0 +1,55 @@
+"""The `pnrotor` command line: a thin layer that parses, calls the library, prints and exits.
+
+One module per subcommand (`verify`, `bench`, `evolve`, `inspect`, `plot`), each with
+``add_parser(subparsers)`` that registers its arguments and sets ``func`` to a ``run(args) -> int``.
+Errors in the user's input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``, or a
+`UsageError` raised by a subcommand) are printed as one line on stderr with exit status 2 and no
+traceback; Ctrl-C exits with 130.
+"""
+
+import argparse
+import importlib
+import sys
+
+SUBCOMMANDS = ("verify", "bench", "evolve", "inspect", "plot")
+
+
+class UsageError(Exception):
+    """A problem with the command line or its input that the user can fix."""
+
+
+def build_parser():
+    from pnrotor import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="pnrotor",
+        description="Orientation of precessing compact binaries by integrating the rotor (Boyle 2016).",
+    )
+    parser.add_argument("--version", action="version", version=f"pnrotor {__version__}")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name in SUBCOMMANDS:
+        try:
+            module = importlib.import_module(f"pnrotor.cli.{name}")
+        except ModuleNotFoundError as error:
+            if error.name != f"pnrotor.cli.{name}":
+                raise
+            continue  # a subcommand not built yet
+        module.add_parser(subparsers)
+    return parser
+
+
+def main(argv=None):
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (UsageError, ValueError, FileNotFoundError, FileExistsError, IsADirectoryError) as error:
+        print(f"pnrotor {args.command}: error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"pnrotor {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,41 @@
+"""Result types of pnrotor runs: what a run returns and what `pnrotor.hdf5` writes and reads.
+
+`FrameHistory` is the result of integrating an angular velocity (`pnrotor.integrate_angular_velocity`,
+the verification mode): times and unit, sign-continuous rotors R(t), with the integrator's statistics
+and every input that defines the run. Rotors are scalar first (w, x, y, z); the frame vectors are
+R x̂ R⁻¹, R ŷ R⁻¹, R ẑ R⁻¹ (Boyle 2016, eq:rotor-rotation).
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(eq=False)
+class FrameHistory:
+    """Rotor history R(t) from integrating an angular velocity.
+
+    Arrays: ``t`` (N,), ``R`` (N, 4) unit and sign-continuous. Scalars: the formulation and integration
+    method, tolerances, integrator statistics (``nfev`` right-hand-side evaluations, ``nsteps`` attempted,
+    ``naccepted``, ``nrejected``, ``n_resets`` generator resets), ``status`` (0 success, see
+    `pnrotor.ode`), ``message`` and ``wall_time`` in seconds. ``inputs`` holds any further parameters
+    of the run (plain numbers, strings, or float arrays). ``dense``, when requested, is the integrator's
+    dense output of the evolved state (not written to files).
+    """
+
+    t: np.ndarray
+    R: np.ndarray
+    formulation: str
+    method: str
+    atol: float
+    rtol: float
+    nfev: int
+    nsteps: int
+    naccepted: int
+    nrejected: int
+    n_resets: int
+    status: int
+    message: str
+    wall_time: float
+    inputs: dict = field(default_factory=dict)
+    dense: object = None
