@@ -1,0 +1,528 @@
+"""pnrotor.hdf5: bitwise round trips, the stored schema read with plain h5py, atomic writes under
+interruption and kill, refusal to overwrite, and clear errors for missing, truncated and foreign files."""
+
+import dataclasses
+import math
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+from datetime import datetime, timedelta, timezone
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from pnrotor import __version__, hdf5
+from pnrotor.history import FrameHistory
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "hdf5-schema.md"
+TEMPORARY = re.compile(r".+\.[0-9a-f]{8}\.pnrotor-tmp$")
+
+
+def frame_history(n=101, **changes):
+    t = np.linspace(0.0, 1.0e6, n)
+    angle = 2 * np.pi * t / 1000
+    R = np.stack([np.cos(angle / 2), 0.1 * np.ones(n), 0.2 * np.sin(angle), np.sin(angle / 2)], axis=1)
+    R /= np.linalg.norm(R, axis=1)[:, None]
+    values = dict(
+        t=t, R=R, formulation="rotor", method="dop853", atol=1e-12, rtol=1e-10, nfev=1234, nsteps=100,
+        naccepted=97, nrejected=3, n_resets=0, status=0, message="success: reached t_end", wall_time=0.25,
+        inputs={"omega": "PrecessingNutatingBinary", "t_end": 1.0e6, "R0": np.array([1.0, 0, 0, 0]), "reset": True},
+    )
+    return FrameHistory(**(values | changes))
+
+
+@dataclasses.dataclass
+class EvolutionLike:
+    """Shaped like the PN engineer's coming `pnrotor.pn.evolve.Evolution`."""
+
+    t: np.ndarray
+    t_seconds: np.ndarray
+    v: np.ndarray
+    Phi: np.ndarray
+    chi1: np.ndarray
+    chi2: np.ndarray
+    R: np.ndarray
+    ell_hat: np.ndarray
+    termination: str
+    stats: dict
+    inputs: dict
+    dense: object = None
+
+
+def evolution_like(n=257):
+    t = np.linspace(-5.0e4, 0.0, n)
+    v = 0.2 + 0.2 * (t - t[0]) / (t[-1] - t[0])
+    chi1 = np.stack([0.3 * np.cos(t / 900), 0.3 * np.sin(t / 900), 0.4 + 0 * t], axis=1)
+    ell = np.stack([0.2 * np.cos(t / 900), 0.2 * np.sin(t / 900), np.ones(n)], axis=1)
+    ell /= np.linalg.norm(ell, axis=1)[:, None]
+    R = np.tile([1.0, 0.0, 0.0, 0.0], (n, 1))
+    return EvolutionLike(
+        t=t, t_seconds=t * 4.925490947641267e-06 * 20, v=v, Phi=np.cumsum(v**3) * (t[1] - t[0]),
+        chi1=chi1, chi2=-0.5 * chi1, R=R, ell_hat=ell, termination="f_max reached",
+        stats={"nfev": 5000, "nsteps": 400, "naccepted": 390, "nrejected": 10, "wall_time": 0.03},
+        inputs={
+            "m1": 12.0, "m2": 8.0, "chi1": (0.3, 0.0, 0.4), "chi2": [-0.15, 0.0, -0.2], "f_ref": 20.0,
+            "f_min": 10.0, "f_max": None, "approximant": "SpinTaylorT4", "pn_order": 7, "atol": 1e-12,
+            "spin_orders": {"spin_orbit": 7, "spin_spin": 4, "quadrupole": np.array([1.0, 1.0])},
+        },
+        dense=lambda t: t,
+    )
+
+
+@pytest.fixture
+def evolution_kind(monkeypatch):
+    monkeypatch.setitem(hdf5.KINDS, "EvolutionLike", f"{__name__}:EvolutionLike")
+
+
+def assert_identical(a, b, where="run"):
+    """a and b hold the same values bitwise, of the same types (dataclass fields other than dense)."""
+    assert type(a) is type(b), where
+    if dataclasses.is_dataclass(a):
+        for field in dataclasses.fields(a):
+            if field.name != "dense":
+                assert_identical(getattr(a, field.name), getattr(b, field.name), f"{where}.{field.name}")
+    elif isinstance(a, np.ndarray):
+        assert (a.dtype, a.shape) == (b.dtype, b.shape), where
+        assert a.tobytes() == b.tobytes(), where
+    elif isinstance(a, dict):
+        assert a.keys() == b.keys(), where
+        for key in a:
+            assert_identical(a[key], b[key], f"{where}[{key!r}]")
+    elif isinstance(a, (list, tuple)):
+        assert len(a) == len(b), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert_identical(x, y, f"{where}[{i}]")
+    elif isinstance(a, float):
+        assert np.float64(a).tobytes() == np.float64(b).tobytes(), where
+    else:
+        assert a == b, where
+
+
+def no_temporaries(folder):
+    return not [name for name in os.listdir(folder) if name.endswith(".pnrotor-tmp")]
+
+
+# --------------------------------------------------------------------------------------------------
+# round trips
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("compression", [None, "gzip", "lzf"])
+def test_frame_history_round_trip_is_bitwise(tmp_path, compression):
+    history = frame_history(n=300_001)  # several chunks
+    path = hdf5.write(tmp_path / "run.h5", history, compression=compression)
+    assert path == tmp_path / "run.h5"
+    back = hdf5.read(path)
+    assert isinstance(back, FrameHistory)
+    assert_identical(history, back)
+    assert back.dense is None
+
+
+def test_evolution_shaped_round_trip_is_bitwise(tmp_path, evolution_kind):
+    run = evolution_like()
+    hdf5.write(tmp_path / "pn.h5", run, compression="gzip")
+    back = hdf5.read(tmp_path / "pn.h5")
+    assert isinstance(back, EvolutionLike)
+    assert_identical(run, back)
+    assert type(back.inputs["chi1"]) is tuple and type(back.inputs["chi2"]) is list
+    assert back.inputs["f_max"] is None and back.dense is None
+
+
+def test_edge_values_round_trip(tmp_path):
+    history = frame_history(
+        n=0, atol=-0.0, rtol=math.nan, wall_time=math.inf, nfev=2**63 - 1, nsteps=-(2**63), message="χ₁ ℓ̂ ✓",
+        inputs={"empty": {}, "blank": "", "big_endian": np.arange(3, dtype=">f8"), "ints": np.arange(4),
+                "scalar": np.array(2.5), "flags": np.array([True, False]), "n": np.int32(7), "x": np.float32(0.1)},
+    )
+    hdf5.write(tmp_path / "edge.h5", history)
+    back = hdf5.read(tmp_path / "edge.h5")
+    assert back.t.shape == (0,) and back.R.shape == (0, 4)
+    assert back.inputs["n"] == 7 and type(back.inputs["n"]) is int
+    assert back.inputs["x"] == float(np.float32(0.1)) and type(back.inputs["x"]) is float
+    history.inputs["n"], history.inputs["x"] = 7, float(np.float32(0.1))  # numpy scalars come back as Python numbers
+    assert_identical(history, back)
+
+
+names = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="/\x00"), min_size=1, max_size=6)
+names = names.filter(lambda name: name != ".")
+texts = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"), max_size=20)
+scalars = st.one_of(st.none(), st.booleans(), st.integers(-(2**63), 2**64 - 1), st.floats(), texts)
+numeric_arrays = st.sampled_from([np.float64, np.dtype(">f8"), np.int64, np.bool_]).flatmap(lambda dtype: arrays(dtype, st.integers(0, 5)))
+sequences = st.lists(st.floats(), max_size=4).map(tuple) | st.lists(st.integers(-(2**31), 2**31), max_size=4)
+inputs = st.recursive(scalars | numeric_arrays | sequences, lambda children: st.dictionaries(names, children, max_size=4), max_leaves=12)
+
+
+@st.composite
+def histories(draw):
+    n = draw(st.integers(0, 40))
+    return FrameHistory(
+        t=draw(arrays(np.float64, n)), R=draw(arrays(np.float64, (n, 4))), formulation=draw(texts),
+        method=draw(st.sampled_from(["dop853", "bulirsch_stoer"])), atol=draw(st.floats()), rtol=draw(st.floats()),
+        nfev=draw(st.integers(0, 2**62)), nsteps=draw(st.integers(0, 10**9)), naccepted=draw(st.integers(0, 10**9)),
+        nrejected=draw(st.integers(0, 10**9)), n_resets=draw(st.integers(0, 10**9)), status=draw(st.integers(-5, 5)),
+        message=draw(texts),
+        wall_time=draw(st.floats(0, 1e6)), inputs=draw(st.dictionaries(names, inputs, max_size=5)),
+    )
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(histories(), st.sampled_from([None, "gzip", "lzf"]))
+def test_generated_histories_round_trip_bitwise(history, compression):
+    with tempfile.TemporaryDirectory() as folder:
+        path = hdf5.write(Path(folder) / "h.h5", history, compression=compression)
+        assert_identical(history, hdf5.read(path))
+
+
+# --------------------------------------------------------------------------------------------------
+# what the file holds, read with plain h5py
+# --------------------------------------------------------------------------------------------------
+
+
+def test_attributes_and_datasets_are_complete(tmp_path):
+    history = frame_history()
+    before = datetime.now(timezone.utc).replace(microsecond=0)
+    hdf5.write(tmp_path / "run.h5", history, compression="gzip")
+    with h5py.File(tmp_path / "run.h5", "r") as f:
+        scalars = {f.name for f in dataclasses.fields(FrameHistory)} - {"t", "R", "inputs", "dense"}
+        assert set(f.attrs) == scalars | {"kind", "pnrotor_schema", "pnrotor_version", "created"}
+        assert f.attrs["kind"] == "FrameHistory" and f.attrs["pnrotor_version"] == __version__
+        assert f.attrs["pnrotor_schema"] == hdf5.SCHEMA_VERSION and isinstance(f.attrs["pnrotor_schema"], np.integer)
+        created = datetime.fromisoformat(f.attrs["created"])
+        assert created.utcoffset() == timedelta(0) and before <= created <= datetime.now(timezone.utc)
+        for name in scalars:
+            assert f.attrs[name] == getattr(history, name)
+        assert set(f) == {"t", "R", "inputs"}
+        assert f["inputs"].attrs["omega"] == "PrecessingNutatingBinary" and f["inputs"].attrs["t_end"] == 1.0e6
+        assert np.array_equal(f["inputs/R0"][()], [1.0, 0, 0, 0])
+        for name, shape in [("t", (101,)), ("R", (101, 4))]:
+            assert f[name].shape == shape and f[name].dtype == np.float64
+            assert f[name].chunks is not None and f[name].compression == "gzip" and f[name].fletcher32
+            assert f[name].attrs["units"] == hdf5.UNITS["FrameHistory"][name]
+        assert "scalar-first" in f["R"].attrs["units"]
+
+
+def test_evolution_datasets_carry_units(tmp_path, evolution_kind):
+    hdf5.write(tmp_path / "pn.h5", evolution_like())
+    with h5py.File(tmp_path / "pn.h5", "r") as f:
+        assert f.attrs["kind"] == "EvolutionLike"
+        assert f["stats"].attrs["nfev"] == 5000 and f["inputs"].attrs["approximant"] == "SpinTaylorT4"
+    hdf5.UNITS["EvolutionLike"] = hdf5.UNITS["Evolution"]
+    try:
+        hdf5.write(tmp_path / "pn.h5", evolution_like(), overwrite=True)
+    finally:
+        del hdf5.UNITS["EvolutionLike"]
+    with h5py.File(tmp_path / "pn.h5", "r") as f:
+        assert f["t"].attrs["units"].startswith("M") and f["t_seconds"].attrs["units"] == "s"
+        assert set(hdf5.UNITS["Evolution"]) <= set(f)
+
+
+def test_large_arrays_are_chunked_without_padding(tmp_path):
+    hdf5.write(tmp_path / "run.h5", frame_history(n=1_000_001))
+    with h5py.File(tmp_path / "run.h5", "r") as f:
+        for name in ("t", "R"):
+            rows, chunk = f[name].shape[0], f[name].chunks[0]
+            nchunks = -(-rows // chunk)
+            assert chunk * f[name].dtype.itemsize * np.prod(f[name].shape[1:]) <= 1 << 20
+            assert nchunks * chunk - rows < nchunks  # the last chunk is (almost) full
+
+
+def test_documented_plain_h5py_reader_works(tmp_path, monkeypatch):
+    text = DOCS.read_text()
+    snippet = re.search(r"```python\n(.*?)```", text, re.S).group(1)
+    assert len(snippet.strip().splitlines()) <= 8
+    history = frame_history()
+    (tmp_path / "waveforms").mkdir()
+    hdf5.write(tmp_path / "waveforms" / "run.h5", history)
+    monkeypatch.chdir(tmp_path)
+    namespace = {}
+    exec(snippet, namespace)
+    assert np.array_equal(namespace["t"], history.t) and np.array_equal(namespace["R"], history.R)
+    assert namespace["attrs"]["formulation"] == "rotor" and namespace["inputs"]["t_end"] == 1.0e6
+
+
+# --------------------------------------------------------------------------------------------------
+# atomic writes
+# --------------------------------------------------------------------------------------------------
+
+
+def fail_on_dataset(monkeypatch, name, error=KeyboardInterrupt):
+    create = h5py.Group.create_dataset
+
+    def create_then_fail(self, dataset, *args, **kwargs):
+        if dataset == name:
+            raise error("interrupted while writing")
+        return create(self, dataset, *args, **kwargs)
+
+    monkeypatch.setattr(h5py.Group, "create_dataset", create_then_fail)
+
+
+@pytest.mark.parametrize("error", [KeyboardInterrupt, RuntimeError])
+def test_interrupted_write_leaves_no_file(tmp_path, monkeypatch, error):
+    fail_on_dataset(monkeypatch, "R", error)
+    with pytest.raises(error):
+        hdf5.write(tmp_path / "run.h5", frame_history())
+    assert os.listdir(tmp_path) == []
+
+
+def test_interrupted_overwrite_keeps_the_old_file(tmp_path, monkeypatch):
+    old = frame_history(message="old")
+    hdf5.write(tmp_path / "run.h5", old)
+    hdf5.write(tmp_path / "batch.h5", old, group="a")
+    fail_on_dataset(monkeypatch, "R")
+    with pytest.raises(KeyboardInterrupt):
+        hdf5.write(tmp_path / "run.h5", frame_history(message="new"), overwrite=True)
+    with pytest.raises(KeyboardInterrupt):
+        hdf5.write(tmp_path / "batch.h5", frame_history(message="new"), group="a", overwrite=True)
+    with pytest.raises(KeyboardInterrupt):
+        hdf5.write(tmp_path / "batch.h5", frame_history(message="new"), group="b")
+    assert sorted(os.listdir(tmp_path)) == ["batch.h5", "run.h5"]
+    assert_identical(hdf5.read(tmp_path / "run.h5"), old)
+    assert hdf5.list_runs(tmp_path / "batch.h5") == ["a"]
+    assert_identical(hdf5.read(tmp_path / "batch.h5", group="a"), old)
+
+
+KILLED_WRITER = """
+import sys, time
+import h5py, numpy as np
+from pnrotor import hdf5
+from pnrotor.history import FrameHistory
+
+create = h5py.Group.create_dataset
+def create_then_pause(self, name, *args, **kwargs):
+    dataset = create(self, name, *args, **kwargs)
+    if name == "R":  # t and R (40 MB) are written; the scalars and inputs are not
+        print("writing", flush=True)
+        time.sleep(120)
+    return dataset
+h5py.Group.create_dataset = create_then_pause
+
+n = 10**6
+history = FrameHistory(t=np.arange(n, dtype=float), R=np.ones((n, 4)), formulation="rotor", method="dop853",
+    atol=1e-12, rtol=1e-12, nfev=1, nsteps=1, naccepted=1, nrejected=0, n_resets=0, status=0, message="new",
+    wall_time=1.0)
+hdf5.write(sys.argv[1], history, overwrite=True)
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGKILL])
+@pytest.mark.parametrize("existing", [False, True])
+def test_killed_writer_leaves_target_absent_or_old(tmp_path, signum, existing):
+    target = tmp_path / "big.h5"
+    old = frame_history(message="old")
+    if existing:
+        hdf5.write(target, old)
+    writer = subprocess.Popen([sys.executable, "-c", KILLED_WRITER, str(target)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert writer.stdout.readline() == "writing\n"
+        temporaries = [name for name in os.listdir(tmp_path) if name != "big.h5"]
+        assert len(temporaries) == 1 and TEMPORARY.match(temporaries[0]) and temporaries[0].startswith("big.h5.")
+        writer.send_signal(signum)
+        assert writer.wait(timeout=60) != 0
+    finally:
+        writer.kill()
+        writer.stdout.close()
+    if existing:
+        assert_identical(hdf5.read(target), old)
+    else:
+        assert not target.exists()
+    left = [name for name in os.listdir(tmp_path) if name != "big.h5"]
+    if signum == signal.SIGINT:
+        assert left == []  # KeyboardInterrupt cleans up
+    else:
+        assert len(left) == 1 and TEMPORARY.match(left[0])  # SIGKILL can leave NAME.XXXXXXXX.pnrotor-tmp
+
+
+def test_new_file_permissions_follow_the_umask(tmp_path):
+    previous = os.umask(0o027)
+    try:
+        hdf5.write(tmp_path / "run.h5", frame_history())
+    finally:
+        os.umask(previous)
+    assert (tmp_path / "run.h5").stat().st_mode & 0o777 == 0o640
+
+
+# --------------------------------------------------------------------------------------------------
+# overwriting and batch files
+# --------------------------------------------------------------------------------------------------
+
+
+def test_refuses_to_overwrite_without_permission(tmp_path):
+    hdf5.write(tmp_path / "run.h5", frame_history(message="first"))
+    with pytest.raises(FileExistsError, match=r"run\.h5 exists.*overwrite=True \(--overwrite\)"):
+        hdf5.write(tmp_path / "run.h5", frame_history(message="second"))
+    assert hdf5.read(tmp_path / "run.h5").message == "first"
+    hdf5.write(tmp_path / "run.h5", frame_history(message="second"), overwrite=True)
+    assert hdf5.read(tmp_path / "run.h5").message == "second"
+    assert os.listdir(tmp_path) == ["run.h5"]
+
+
+def test_batch_file_runs(tmp_path, evolution_kind):
+    path = tmp_path / "batch.h5"
+    hdf5.write(path, frame_history(message="b"), group="b")
+    hdf5.write(path, evolution_like(), group="a", compression="lzf")
+    assert hdf5.list_runs(path) == ["a", "b"]
+    assert hdf5.read(path, group="b").message == "b"
+    assert_identical(hdf5.read(path, group="a"), evolution_like())
+    assert hdf5.metadata(path, group="a")["kind"] == "EvolutionLike"
+    with pytest.raises(FileExistsError, match=r"already has run 'b'.*--overwrite"):
+        hdf5.write(path, frame_history(message="b2"), group="b")
+    hdf5.write(path, frame_history(message="b2"), group="b", overwrite=True)
+    assert hdf5.read(path, group="b").message == "b2" and hdf5.list_runs(path) == ["a", "b"]
+    with pytest.raises(ValueError, match=r"batch file; choose a run with group=NAME .*\['a', 'b'\]"):
+        hdf5.read(path)
+    with pytest.raises(ValueError, match=r"has no run 'c'; its runs are \['a', 'b'\]"):
+        hdf5.read(path, group="c")
+    assert os.listdir(tmp_path) == ["batch.h5"]
+
+
+def test_single_run_file_as_a_batch(tmp_path):
+    hdf5.write(tmp_path / "run.h5", frame_history(message="one"))
+    assert hdf5.list_runs(tmp_path / "run.h5") == ["/"]
+    assert hdf5.read(tmp_path / "run.h5", group="/").message == "one"
+    with pytest.raises(ValueError, match="holds a single run"):
+        hdf5.write(tmp_path / "run.h5", frame_history(), group="x")
+    with h5py.File(tmp_path / "foreign.h5", "w") as f:
+        f["data"] = np.zeros(3)
+    with pytest.raises(ValueError, match="not a pnrotor file"):
+        hdf5.write(tmp_path / "foreign.h5", frame_history(), group="x")
+
+
+# --------------------------------------------------------------------------------------------------
+# errors
+# --------------------------------------------------------------------------------------------------
+
+
+def test_write_target_errors(tmp_path):
+    with pytest.raises(FileNotFoundError, match=f"folder {re.escape(str(tmp_path / 'nope'))} does not exist"):
+        hdf5.write(tmp_path / "nope" / "run.h5", frame_history())
+    with pytest.raises(IsADirectoryError, match="is a folder"):
+        hdf5.write(tmp_path, frame_history())
+    with pytest.raises(ValueError, match="compression must be one of"):
+        hdf5.write(tmp_path / "run.h5", frame_history(), compression="zstd")
+    with pytest.raises(ValueError, match="not a valid HDF5 name"):
+        hdf5.write(tmp_path / "run.h5", frame_history(), group="a/b")
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize(
+    "inputs, error, message",
+    [
+        ({"a/b": 1.0}, ValueError, r"key of FrameHistory.inputs 'a/b' is not a valid HDF5 name"),
+        ({1: 1.0}, TypeError, "must be a string"),
+        ({"x": {"y": {1, 2}}}, TypeError, r"FrameHistory.inputs\['x'\]\['y'\]: cannot write a set"),
+        ({"names": ["a", "b"]}, TypeError, "only numeric arrays and flat lists"),
+        ({"nested": [[1.0], [2.0]]}, TypeError, "only numeric arrays and flat lists"),
+        ({"ragged": [[1.0], [2.0, 3.0]]}, ValueError, r"FrameHistory.inputs\['ragged'\]"),
+        ({"nul": "a\x00b"}, ValueError, r"cannot write FrameHistory.inputs\['nul'\]"),
+        ({"huge": 2**64}, ValueError, r"cannot write FrameHistory.inputs\['huge'\]"),
+    ],
+)
+def test_unwritable_values_are_named(tmp_path, inputs, error, message):
+    with pytest.raises(error, match=message):
+        hdf5.write(tmp_path / "run.h5", frame_history(inputs=inputs))
+    assert os.listdir(tmp_path) == []
+
+
+def test_only_registered_dataclasses_are_written(tmp_path, monkeypatch):
+    with pytest.raises(TypeError, match="writes the run types"):
+        hdf5.write(tmp_path / "x.h5", {"t": np.zeros(3)})
+    with pytest.raises(TypeError, match="writes the run types"):
+        hdf5.write(tmp_path / "x.h5", evolution_like())  # not registered
+
+    @dataclasses.dataclass
+    class Reserved:
+        kind: str
+
+    monkeypatch.setitem(hdf5.KINDS, "Reserved", f"{__name__}:{Reserved.__qualname__}")
+    with pytest.raises(ValueError, match="reserved"):
+        hdf5.write(tmp_path / "x.h5", Reserved("a"))
+    assert os.listdir(tmp_path) == []
+
+
+def test_missing_file_and_folder(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        hdf5.read(tmp_path / "absent.h5")
+    with pytest.raises(IsADirectoryError, match="is a folder"):
+        hdf5.read(tmp_path)
+
+
+@pytest.mark.parametrize("keep", [0.999, 0.5, 0.01, 200])
+def test_truncated_file_is_reported(tmp_path, keep):
+    path = hdf5.write(tmp_path / "run.h5", frame_history(n=20_001))
+    data = path.read_bytes()
+    path.write_bytes(data[: int(keep * len(data)) if keep < 1 else keep])
+    with pytest.raises(ValueError, match="truncated or corrupt"):
+        hdf5.read(path)
+
+
+@pytest.mark.parametrize("compression", [None, "gzip"])
+def test_damaged_data_is_reported(tmp_path, compression):
+    path = hdf5.write(tmp_path / "run.h5", frame_history(n=20_001), compression=compression)
+    with h5py.File(path, "r") as f:
+        assert f["R"].fletcher32
+        offset = f["R"].id.get_chunk_info(0).byte_offset + 100
+    data = bytearray(path.read_bytes())
+    data[offset] ^= 0x10
+    path.write_bytes(data)
+    with pytest.raises(ValueError, match="is corrupt: HDF5 cannot read it"):
+        hdf5.read(path)
+
+
+def test_non_hdf5_and_empty_files(tmp_path):
+    (tmp_path / "notes.h5").write_text("t,R\n0,1\n")
+    with pytest.raises(ValueError, match=r"notes\.h5 is not an HDF5 file$"):
+        hdf5.read(tmp_path / "notes.h5")
+    (tmp_path / "empty.h5").touch()
+    with pytest.raises(ValueError, match=r"is not an HDF5 file \(it is empty\)"):
+        hdf5.read(tmp_path / "empty.h5")
+
+
+def test_foreign_hdf5_file(tmp_path):
+    with h5py.File(tmp_path / "other.h5", "w") as f:
+        f["t"] = np.zeros(3)
+        f.attrs["schema_version"] = 1
+    with pytest.raises(ValueError, match="an HDF5 file but not a pnrotor file"):
+        hdf5.read(tmp_path / "other.h5")
+
+
+@pytest.mark.parametrize(
+    "schema, message",
+    [(2, r"schema version 2 \(written by pnrotor 9\.9\).*reads schema versions 1 to 1; upgrade pnrotor"),
+     (0, r"schema version 0 .*reads schema versions 1 to 1$"),
+     ("1", r"schema version '1' ")],
+)
+def test_unknown_schema_version(tmp_path, schema, message):
+    path = hdf5.write(tmp_path / "run.h5", frame_history())
+    with h5py.File(path, "r+") as f:
+        f.attrs["pnrotor_schema"] = schema
+        f.attrs["pnrotor_version"] = "9.9"
+    with pytest.raises(ValueError, match=message):
+        hdf5.read(path)
+
+
+def test_unknown_kind_and_mismatched_fields(tmp_path):
+    path = hdf5.write(tmp_path / "run.h5", frame_history())
+    with h5py.File(path, "r+") as f:
+        f.attrs["kind"] = "Waveform"
+    with pytest.raises(ValueError, match=r"unknown run kind 'Waveform'; this pnrotor reads \["):
+        hdf5.read(path)
+    hdf5.write(path, frame_history(), overwrite=True)
+    with h5py.File(path, "r+") as f:
+        del f.attrs["nfev"]
+    with pytest.raises(ValueError, match="do not match FrameHistory"):
+        hdf5.read(path)
+
+
+def test_kind_whose_class_is_not_importable(tmp_path, monkeypatch, evolution_kind):
+    hdf5.write(tmp_path / "pn.h5", evolution_like())
+    monkeypatch.setitem(hdf5.KINDS, "EvolutionLike", "pnrotor.no_such_module:Evolution")
+    with pytest.raises(ValueError, match="need pnrotor.no_such_module:Evolution, which is not importable"):
+        hdf5.read(tmp_path / "pn.h5")
