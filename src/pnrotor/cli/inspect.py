@@ -1,0 +1,122 @@
+"""`pnrotor inspect FILE`: print what a pnrotor HDF5 file holds.
+
+For one run: its kind, schema and pnrotor version, creation time, the sample count and time range, every
+array (shape, dtype, units), every scalar and every dict field (inputs, statistics) with exact values,
+then a short summary — for post-Newtonian runs the duration in M and s, the number of orbits ΔΦ/2π,
+the first and final v and the termination; for frame histories the formulation, method, tolerances,
+status and integrator work. For a batch file: its runs, or one run with ``--group``.
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+
+from pnrotor import hdf5
+
+
+def add_parser(subparsers):
+    parser = subparsers.add_parser(
+        "inspect",
+        help="print the attributes and a summary of a pnrotor HDF5 file",
+        description="Print the metadata, inputs, statistics and a summary of a run stored by pnrotor.",
+    )
+    parser.add_argument("file", help="a pnrotor HDF5 file, e.g. waveforms/NAME.h5")
+    parser.add_argument("--group", metavar="NAME", help="the run NAME of a batch file (default: list its runs)")
+    parser.set_defaults(func=run)
+
+
+def run(args):
+    runs = hdf5.list_runs(args.file)
+    if args.group is None and runs != ["/"]:
+        print(f"{args.file}: batch file with {len(runs)} run{'s' * (len(runs) != 1)}")
+        for name in runs:
+            meta = hdf5.metadata(args.file, name)
+            print(f"  {name}  {meta['kind']}, created {meta['created']}")
+        print("show one with: pnrotor inspect FILE --group NAME")
+        return 0
+    print("\n".join(describe(args.file, args.group)))
+    return 0
+
+
+def describe(path, group=None):
+    """The lines `pnrotor inspect` prints for the run in `path` (batch group `group`)."""
+    meta = hdf5.metadata(path, group)
+    result = hdf5.read(path, group)
+    units = hdf5.UNITS.get(meta["kind"], {})
+    where = path if group in (None, "/") else f"{path} run {group!r}"
+    lines = [
+        f"{where}: {meta['kind']}",
+        f"  pnrotor schema {meta['pnrotor_schema']}, written by pnrotor {meta['pnrotor_version']}, created {meta['created']}",
+    ]
+    t = getattr(result, "t", None)
+    if isinstance(t, np.ndarray) and t.ndim == 1:
+        span = f", t from {t[0].item()!r} to {t[-1].item()!r}" if t.size else ""
+        lines.append(f"  {t.size} samples{span}")
+
+    fields = [(f.name, getattr(result, f.name)) for f in dataclasses.fields(result) if f.name not in hdf5.NOT_WRITTEN]
+    arrays = [(name, value) for name, value in fields if isinstance(value, np.ndarray)]
+    lines.append("arrays")
+    lines += _table((name, f"{value.shape} {value.dtype}" + (f"  [{units[name]}]" if name in units else "")) for name, value in arrays)
+    scalars = [(name, value) for name, value in fields if not isinstance(value, (np.ndarray, dict))]
+    lines.append("attributes")
+    lines += _table((name, _format(value)) for name, value in scalars)
+    for name, value in fields:
+        if isinstance(value, dict):
+            lines.append(name)
+            lines += _items(value)
+    lines.append("summary")
+    lines += ["  " + line for line in summary(result)]
+    return lines
+
+
+def summary(result):
+    """A few lines that say what the run did, from its fields (duck-typed, so any run kind works)."""
+    t, v, Phi = (getattr(result, name, None) for name in ("t", "v", "Phi"))
+    if v is not None and Phi is not None:
+        if t.size == 0:
+            return ["no samples"]
+        duration = f"{t[-1] - t[0]:.6g} M"
+        t_seconds = getattr(result, "t_seconds", None)
+        if t_seconds is not None:
+            duration += f" = {t_seconds[-1] - t_seconds[0]:.6g} s"
+        return [
+            f"duration {duration}",
+            f"orbits {(Phi[-1] - Phi[0]) / (2 * math.pi):.6g} (ΔΦ/2π)",
+            f"v from {v[0]:.6g} to {v[-1]:.6g} (final)",
+            f"termination: {getattr(result, 'termination', 'not recorded')}",
+        ]
+    if hasattr(result, "formulation"):
+        r = result
+        return [
+            f"{r.formulation} formulation, {r.method}, atol {r.atol:g}, rtol {r.rtol:g}",
+            f"status {r.status}: {r.message}",
+            f"{r.nfev} right-hand-side evaluations, {r.nsteps} steps ({r.naccepted} accepted, {r.nrejected} rejected), "
+            f"{r.n_resets} generator resets, {r.wall_time:.3g} s wall time",
+        ]
+    return ["no summary for this kind of run"]
+
+
+def _items(values, indent="  "):
+    """A dict field as an aligned table, sorted by key, nested dicts indented below their key."""
+    lines = _table(((name, _format(value)) for name, value in sorted(values.items()) if not isinstance(value, dict)), indent)
+    for name, value in sorted(values.items()):
+        if isinstance(value, dict):
+            lines.append(f"{indent}{name}")
+            lines += _items(value, indent + "  ")
+    return lines
+
+
+def _table(rows, indent="  "):
+    rows = list(rows)
+    width = max((len(name) for name, _ in rows), default=0)
+    return [f"{indent}{name:<{width}}  {text}" for name, text in rows]
+
+
+def _format(value):
+    """Exact text for a stored value: shortest round-trip floats, small arrays in full, large ones summarized."""
+    if isinstance(value, np.ndarray):
+        if value.size <= 8:
+            return f"{np.array2string(value, separator=', ', floatmode='unique')} {value.dtype}"
+        return f"{value.shape} {value.dtype}, from {value.min().item()!r} to {value.max().item()!r}"
+    return repr(value)

@@ -1,0 +1,113 @@
+"""`pnrotor plot FILE`: draw a run stored by pnrotor into a PNG (needs the plot extra, matplotlib).
+
+Post-Newtonian runs (fields ``ell_hat``, ``v``, ``chi1``, ``chi2``): the path of ℓ̂ on the unit sphere,
+v(t), and the components of χ₁ and χ₂. Frame histories: the path of the frame vector R ẑ R⁻¹ on the unit
+sphere and its components, the rotor components w, x, y, z against t, and for runs longer than `ZOOM`
+samples the rotor components of the first `ZOOM` samples. Lines of more than `MAX_POINTS` samples are
+drawn from every k-th sample, and the panel says so.
+"""
+
+from pathlib import Path
+
+import numpy as np
+
+from pnrotor import hdf5
+from pnrotor.cli import UsageError
+
+MAX_POINTS = 50_000
+ZOOM = 2000
+
+
+def add_parser(subparsers):
+    parser = subparsers.add_parser(
+        "plot",
+        help="draw a pnrotor HDF5 file into a PNG (needs pnrotor[plot])",
+        description="Draw a run stored by pnrotor: ℓ̂ on the sphere, v(t) and spins for post-Newtonian runs; "
+        "the ẑ frame vector and rotor components for frame histories.",
+    )
+    parser.add_argument("file", help="a pnrotor HDF5 file, e.g. waveforms/NAME.h5")
+    parser.add_argument("-o", "--output", metavar="PNG", help="image to write, replaced if present (default: FILE with .png)")
+    parser.add_argument("--group", metavar="NAME", help="the run NAME of a batch file")
+    parser.set_defaults(func=run)
+
+
+def run(args):
+    try:
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise UsageError("plotting needs matplotlib: pip install 'pnrotor[plot]'") from None
+    output = Path(args.output) if args.output else _default_output(Path(args.file), args.group)
+    if not output.parent.is_dir():
+        raise FileNotFoundError(f"folder {output.parent} does not exist (writing {output})")
+    result = hdf5.read(args.file, args.group)
+    figure = Figure(figsize=(12, 8.5), layout="constrained")
+    title = args.file if args.group in (None, "/") else f"{args.file} run {args.group!r}"
+    figure.suptitle(f"{title}: {type(result).__name__}")
+    if all(hasattr(result, name) for name in ("ell_hat", "v", "chi1", "chi2")):
+        _post_newtonian(figure, result)
+    else:
+        _frame_history(figure, result)
+    figure.savefig(output, dpi=100)
+    print(f"wrote {output}")
+    return 0
+
+
+def _default_output(file, group):
+    return file.with_name(file.stem + ("" if group in (None, "/") else f"-{group}") + ".png")
+
+
+def _post_newtonian(figure, result):
+    every = _stride(result.t.size)
+    t = result.t[::every]
+    _sphere(figure.add_subplot(2, 2, 1, projection="3d"), result.ell_hat[::every], "ℓ̂ (orbital plane normal)", every)
+    v = figure.add_subplot(2, 2, 2)
+    v.plot(t, result.v[::every])
+    v.set(xlabel="t [M]", ylabel="v = (M Ω)^(1/3)", title="v(t)")
+    for position, name, symbol in ((3, "chi1", "χ₁"), (4, "chi2", "χ₂")):
+        axes = figure.add_subplot(2, 2, position)
+        for component, label in enumerate("xyz"):
+            axes.plot(t, getattr(result, name)[::every, component], label=f"{symbol}{label}")
+        axes.set(xlabel="t [M]", ylabel=symbol, title=f"{symbol} components (inertial frame)")
+        axes.legend(loc="best")
+
+
+def _frame_history(figure, result):
+    from pnrotor.quaternion import rotate
+
+    every = _stride(result.t.size)
+    t, R = result.t[::every], result.R[::every]
+    z = rotate(R, np.array([0.0, 0.0, 1.0])) if R.size else np.empty((0, 3))
+    _sphere(figure.add_subplot(2, 2, 1, projection="3d"), z, "frame vector R ẑ R⁻¹", every)
+    _components(figure.add_subplot(2, 2, 2), t, z, "xyz", f"R ẑ R⁻¹ components{_sampling(every)}")
+    _components(figure.add_subplot(2, 2, 3), t, R, "wxyz", f"rotor components{_sampling(every)}")
+    if result.t.size > ZOOM:  # fast rotation fills the full-range panel; show its start at full resolution
+        title = f"rotor components, first {ZOOM} samples"
+        _components(figure.add_subplot(2, 2, 4), result.t[:ZOOM], result.R[:ZOOM], "wxyz", title)
+
+
+def _components(axes, t, values, labels, title):
+    for component, label in enumerate(labels):
+        axes.plot(t, values[:, component], label=label, lw=0.8)
+    axes.set(xlabel="t", ylabel="component", title=title)
+    axes.legend(loc="upper right")
+
+
+def _sphere(axes, path, name, every):
+    """The unit sphere as a light wireframe, `path` (K, 3) on it, its start and end marked."""
+    u, w = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
+    axes.plot_wireframe(np.cos(u) * np.sin(w), np.sin(u) * np.sin(w), np.cos(w), color="0.85", lw=0.5)
+    axes.plot(*path.T, lw=0.8)
+    if len(path):
+        axes.scatter(*path[0], color="green", label="start")
+        axes.scatter(*path[-1], color="red", label="end")
+        axes.legend(loc="upper left")
+    axes.set(xlabel="x", ylabel="y", zlabel="z", title=f"{name} on the unit sphere{_sampling(every)}")
+    axes.set_box_aspect((1, 1, 1))
+
+
+def _stride(n):
+    return max(1, -(-n // MAX_POINTS))
+
+
+def _sampling(every):
+    return "" if every == 1 else f"\n(drawn from every k-th sample, k = {every})"

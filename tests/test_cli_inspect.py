@@ -1,0 +1,202 @@
+"""The read-only file commands `pnrotor inspect` and `pnrotor plot`: what they print and draw, and
+one-line errors with exit status 2 (no traceback) for missing, truncated, foreign and other bad files."""
+
+import math
+import re
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+import pytest
+from test_hdf5 import EvolutionLike, evolution_like, frame_history
+
+from pnrotor import __version__, hdf5
+from pnrotor.cli import main
+
+
+@pytest.fixture
+def evolution_kind(monkeypatch):
+    monkeypatch.setitem(hdf5.KINDS, "EvolutionLike", f"{EvolutionLike.__module__}:EvolutionLike")
+
+
+@pytest.fixture
+def files(tmp_path, evolution_kind):
+    paths = {"frames": tmp_path / "frames.h5", "pn": tmp_path / "pn.h5", "batch": tmp_path / "batch.h5"}
+    hdf5.write(paths["frames"], frame_history(n=4001))
+    hdf5.write(paths["pn"], evolution_like())
+    hdf5.write(paths["batch"], evolution_like(), group="pn")
+    hdf5.write(paths["batch"], frame_history(), group="frames")
+    return paths
+
+
+def inspect_output(capsys, *args):
+    assert main(["inspect", *map(str, args)]) == 0
+    return capsys.readouterr().out
+
+
+# --------------------------------------------------------------------------------------------------
+# inspect
+# --------------------------------------------------------------------------------------------------
+
+
+def test_inspect_frame_history_prints_every_attribute_and_input(files, capsys):
+    out = inspect_output(capsys, files["frames"])
+    history = frame_history(n=4001)
+    created = hdf5.metadata(files["frames"])["created"]
+    assert out.startswith(f"{files['frames']}: FrameHistory\n")
+    assert f"pnrotor schema 1, written by pnrotor {__version__}, created {created}" in out
+    assert "4001 samples, t from 0.0 to 1000000.0" in out
+    assert "(4001, 4) float64" in out and "scalar-first" in out
+    for name in ("formulation", "method", "atol", "rtol", "nfev", "nsteps", "naccepted", "nrejected", "n_resets",
+                 "status", "message", "wall_time"):
+        assert f"  {name} " in out and repr(getattr(history, name)) in out
+    for line in ("  omega  'PrecessingNutatingBinary'", "  reset  True", "  t_end  1000000.0", "  R0     [1., 0., 0., 0.] float64"):
+        assert line in out.splitlines()
+    summary = out.split("summary\n")[1]
+    assert "rotor formulation, dop853, atol 1e-12, rtol 1e-10" in summary and "status 0: success: reached t_end" in summary
+    assert "1234 right-hand-side evaluations, 100 steps (97 accepted, 3 rejected), 0 generator resets" in summary
+
+
+def test_inspect_post_newtonian_run_summary(files, capsys):
+    out = inspect_output(capsys, files["pn"])
+    run = evolution_like()
+    orbits = (run.Phi[-1] - run.Phi[0]) / (2 * math.pi)
+    duration_s = run.t_seconds[-1] - run.t_seconds[0]
+    summary = out.split("summary\n")[1].splitlines()
+    assert summary == [
+        f"  duration 50000 M = {duration_s:.6g} s",
+        f"  orbits {orbits:.6g} (ΔΦ/2π)",
+        "  v from 0.2 to 0.4 (final)",
+        "  termination: f_max reached",
+    ]
+    lines = out.splitlines()
+    for line in ("  approximant  'SpinTaylorT4'", "  chi1         (0.3, 0.0, 0.4)", "  f_max        None",
+                 "  m1           12.0", "  nfev       5000", "  spin_orders", "    spin_orbit  7", "    quadrupole  [1., 1.] float64"):
+        assert line in lines
+    assert lines[lines.index("stats") + 1 : lines.index("stats") + 6] == [
+        "  naccepted  390", "  nfev       5000", "  nrejected  10", "  nsteps     400", "  wall_time  0.03"
+    ]
+
+
+def test_inspect_large_input_array_is_summarized(tmp_path, capsys):
+    hdf5.write(tmp_path / "run.h5", frame_history(inputs={"t_eval": np.linspace(0.0, 10.0, 1001)}))
+    out = inspect_output(capsys, tmp_path / "run.h5")
+    assert "  t_eval  (1001,) float64, from 0.0 to 10.0" in out.splitlines()
+
+
+def test_inspect_batch_file(files, capsys):
+    out = inspect_output(capsys, files["batch"])
+    lines = out.splitlines()
+    assert lines[0] == f"{files['batch']}: batch file with 2 runs"
+    assert lines[1].startswith("  frames  FrameHistory, created ") and lines[2].startswith("  pn  EvolutionLike, created ")
+    out = inspect_output(capsys, files["batch"], "--group", "pn")
+    assert out.startswith(f"{files['batch']} run 'pn': EvolutionLike\n") and "termination: f_max reached" in out
+
+
+def test_inspect_empty_run(tmp_path, capsys):
+    hdf5.write(tmp_path / "empty.h5", frame_history(n=0))
+    out = inspect_output(capsys, tmp_path / "empty.h5")
+    assert "  0 samples\n" in out and "(0, 4) float64" in out
+
+
+# --------------------------------------------------------------------------------------------------
+# plot
+# --------------------------------------------------------------------------------------------------
+
+
+def assert_sensible_png(path, shape):
+    image = pytest.importorskip("matplotlib.image").imread(path)
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert image.shape[:2] == shape
+    assert image[..., :3].std() > 0.05  # not a blank canvas
+
+
+@pytest.mark.parametrize("which", ["frames", "pn"])
+def test_plot_writes_a_png(files, which, capsys):
+    pytest.importorskip("matplotlib")
+    png = files[which].with_suffix(".png")
+    assert main(["plot", str(files[which])]) == 0
+    assert capsys.readouterr().out == f"wrote {png}\n"
+    assert_sensible_png(png, (850, 1200))
+
+
+def test_plot_long_run_and_batch_group(files, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    hdf5.write(tmp_path / "long.h5", frame_history(n=200_001))
+    assert main(["plot", str(tmp_path / "long.h5"), "-o", str(tmp_path / "long-plot.png")]) == 0
+    assert_sensible_png(tmp_path / "long-plot.png", (850, 1200))
+    assert main(["plot", str(files["batch"]), "--group", "pn"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == f"wrote {tmp_path / 'batch-pn.png'}"
+    assert_sensible_png(tmp_path / "batch-pn.png", (850, 1200))
+
+
+def test_plot_without_matplotlib(files, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "matplotlib.figure", None)
+    assert main(["plot", str(files["pn"])]) == 2
+    assert capsys.readouterr().err == "pnrotor plot: error: plotting needs matplotlib: pip install 'pnrotor[plot]'\n"
+    assert not files["pn"].with_suffix(".png").exists()
+
+
+def test_plot_output_folder_missing(files, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    assert main(["plot", str(files["pn"]), "-o", str(tmp_path / "no" / "x.png")]) == 2
+    assert f"folder {tmp_path / 'no'} does not exist" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------------------------------
+# bad files: exit 2, one line, no traceback
+# --------------------------------------------------------------------------------------------------
+
+
+def bad_file(tmp_path, what):
+    path = tmp_path / f"{what}.h5"
+    if what == "truncated":
+        hdf5.write(path, frame_history(n=5001))
+        path.write_bytes(path.read_bytes()[:20_000])
+    elif what == "foreign":
+        with h5py.File(path, "w") as f:
+            f["data"] = np.arange(3.0)
+    elif what == "text":
+        path.write_text("not hdf5\n")
+    elif what == "newer":
+        hdf5.write(path, frame_history())
+        with h5py.File(path, "r+") as f:
+            f.attrs["pnrotor_schema"] = 99
+    return path
+
+
+BAD = [
+    ("missing", "no such file"),
+    ("truncated", "is truncated or corrupt"),
+    ("foreign", "an HDF5 file but not a pnrotor file"),
+    ("text", "is not an HDF5 file"),
+    ("newer", "schema version 99 .*upgrade pnrotor"),
+]
+
+
+@pytest.mark.parametrize("command", ["inspect", "plot"])
+@pytest.mark.parametrize("what, message", BAD)
+def test_bad_files_exit_2_with_one_line(tmp_path, capsys, command, what, message):
+    path = bad_file(tmp_path, what)
+    assert main([command, str(path)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert len(captured.err.splitlines()) == 1
+    assert captured.err.startswith(f"pnrotor {command}: error: ")
+    assert re.search(message, captured.err)
+
+
+def test_missing_batch_group(files, capsys):
+    assert main(["inspect", str(files["batch"]), "--group", "nope"]) == 2
+    assert "has no run 'nope'; its runs are ['frames', 'pn']" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["inspect", "plot"])
+def test_command_line_without_traceback(tmp_path, command):
+    path = bad_file(tmp_path, "truncated")
+    done = subprocess.run([sys.executable, "-m", "pnrotor", command, str(path)], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr
+    assert done.stderr.startswith(f"pnrotor {command}: error: {path} is truncated or corrupt: HDF5 cannot open it (")
+    assert done.stderr.count("\n") == 1
