@@ -9,15 +9,10 @@ import sys
 import h5py
 import numpy as np
 import pytest
-from test_hdf5 import EvolutionLike, evolution_like, frame_history
+from test_hdf5 import evolution_kind, evolution_like, frame_history  # noqa: F401 (evolution_kind: a fixture)
 
 from pnrotor import __version__, hdf5
 from pnrotor.cli import main
-
-
-@pytest.fixture
-def evolution_kind(monkeypatch):
-    monkeypatch.setitem(hdf5.KINDS, "EvolutionLike", f"{EvolutionLike.__module__}:EvolutionLike")
 
 
 @pytest.fixture

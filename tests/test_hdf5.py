@@ -79,7 +79,7 @@ def evolution_like(n=257):
 
 @pytest.fixture
 def evolution_kind(monkeypatch):
-    monkeypatch.setitem(hdf5.KINDS, "EvolutionLike", f"{__name__}:EvolutionLike")
+    monkeypatch.setitem(hdf5.KINDS, "EvolutionLike", f"{EvolutionLike.__module__}:EvolutionLike")
 
 
 def assert_identical(a, b, where="run"):
@@ -520,6 +520,13 @@ def test_unknown_kind_and_mismatched_fields(tmp_path):
         del f.attrs["nfev"]
     with pytest.raises(ValueError, match="do not match FrameHistory"):
         hdf5.read(path)
+
+
+def test_registered_kinds_name_their_dataclasses():
+    assert hdf5.KINDS["FrameHistory"] == f"{FrameHistory.__module__}:FrameHistory"
+    evolve = pytest.importorskip("pnrotor.pn.evolve", reason="pnrotor.pn.evolve.Evolution is not written yet")
+    assert dataclasses.is_dataclass(evolve.Evolution)
+    assert hdf5.KINDS["Evolution"] == f"{evolve.Evolution.__module__}:{evolve.Evolution.__qualname__}"
 
 
 def test_kind_whose_class_is_not_importable(tmp_path, monkeypatch, evolution_kind):
