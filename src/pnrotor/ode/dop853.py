@@ -809,7 +809,7 @@ def _positive_factor(x, name, lo, hi, lo_open=True, hi_open=False):
 def _status_message(status, iv, fv):
     msg = STATUS_MESSAGES[status]
     if status < 0 and math.isfinite(fv[FV_TFAIL]):
-        msg = msg.rstrip(".") + f" (at t = {fv[FV_TFAIL]!r})."
+        msg = msg.rstrip(".") + f" (at t = {float(fv[FV_TFAIL])!r})."
     if status == STATUS_STEP_UNDERFLOW and iv[IV_NANREJ]:
         msg += " The last error estimate was NaN or infinite: the right-hand side produced non-finite values."
     return msg
