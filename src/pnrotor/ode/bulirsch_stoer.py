@@ -39,9 +39,9 @@ from numba import njit, types
 from .dop853 import (AFTER_STEP_SIG, AFTER_STEP_TYPE, FV_H, FV_T, FV_TFAIL, IV_NACC, IV_NANREJ,
                      IV_NFEV, IV_NMOD, IV_NOUT, IV_NREJ, IV_NSTEPS, IV_STATUS, OUT_FINAL, OUT_STEPS,
                      OUT_TEVAL, RHS_SIG, RHS_TYPE, _A1, _A2, _I1, _all_finite, _append_row, _f8, _finite_scalar,
-                     _i8, _jit_function, _status_message, _trivial_result, _validate_args,
+                     _default_hook, _entry_point, _i8, _jit_function, _status_message, _trivial_result, _validate_args,
                      _validate_state, _validate_steps, _validate_t_eval, _validate_tolerances,
-                     no_after_step, select_initial_step)
+                     select_initial_step)
 from .result import (STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_SUCCESS,
                      OdeResult)
 
@@ -363,7 +363,8 @@ def bulirsch_stoer(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None,
     if isinstance(k_max, (bool, np.bool_)) or not isinstance(k_max, (int, np.integer)) or not 4 <= k_max <= 12:
         raise ValueError(f"k_max must be an integer in [4, 12], got {k_max!r}")
     rhs_f = _jit_function(rhs, RHS_SIG, "rhs")
-    after_f = no_after_step if after_step is None else _jit_function(after_step, AFTER_STEP_SIG, "after_step")
+    after_f = _default_hook("after_step") if after_step is None else _jit_function(after_step, AFTER_STEP_SIG,
+                                                                                       "after_step")
 
     if t_end == t0:
         return _trivial_result(t0, y0, mode, te, "Bulirsch-Stoer")
@@ -375,7 +376,7 @@ def bulirsch_stoer(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None,
     k_init = int(-math.log10(tol) * 0.6 + 1.5) - 1
     k_init = min(max(k_init, 1), int(k_max) - 2)
 
-    t_out, y_out, iv, fv = _bs_core(rhs_f, after_f, t0, y0, t_end, p, atol_a, rtol_a, fs, ms,
+    t_out, y_out, iv, fv = _entry_point(_bs_core)(rhs_f, after_f, t0, y0, t_end, p, atol_a, rtol_a, fs, ms,
                                     max_steps, mode, int(k_max), k_init)
     status = int(iv[IV_STATUS])
     nout = int(iv[IV_NOUT])

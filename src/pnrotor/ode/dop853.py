@@ -39,6 +39,7 @@ indirect call costs about a nanosecond.
 """
 
 import math
+import weakref
 
 import numpy as np
 from numba import njit, types
@@ -93,6 +94,65 @@ def no_after_step(t, y, p):
 def no_events(t, y, p, g):
     """Default ``events``: no event functions."""
     return
+
+
+# --------------------------------------------------------------------------------------------------
+# calling the cores cheaply
+# --------------------------------------------------------------------------------------------------
+#
+# Passing a numba dispatcher where a FunctionType is expected costs ~0.1 ms per call of the core:
+# the dispatcher resolves the Dispatcher -> FunctionType conversion, and unboxing looks up two
+# addresses per function argument.  For the built-in no-op hooks, which can never raise, we pass
+# an object implementing numba's wrapper-address protocol with the address looked up once (the
+# call then goes through the function's C wrapper); user functions are passed as dispatchers so
+# that exceptions they raise propagate.  The cores are called through their compiled entry point
+# (all arguments are prepared with exactly the declared types), falling back to the dispatcher.
+
+
+class _FunctionAddress:
+    """A compiled numba function given to a core by address (numba's ``__wrapper_address__``)."""
+
+    def __init__(self, dispatcher, sig):
+        from numba.experimental.function_type import _get_wrapper_address
+
+        self._dispatcher = dispatcher  # keeps the compiled code alive
+        self._address = _get_wrapper_address(dispatcher, sig)
+        self._numba_type_ = types.FunctionType(sig)
+
+    def __wrapper_address__(self):
+        return self._address
+
+
+_HOOKS = {}
+
+
+def _default_hook(name):
+    """The no-op hook ``name`` in its cheapest form for passing to a core."""
+    h = _HOOKS.get(name)
+    if h is None:
+        disp, sig = {"after_step": (no_after_step, AFTER_STEP_SIG), "events": (no_events, EVENTS_SIG)}[name]
+        try:
+            h = _FunctionAddress(disp, sig)
+        except Exception:  # pragma: no cover - numba internals changed: use the dispatcher
+            h = disp
+        _HOOKS[name] = h
+    return h
+
+
+_ENTRY_POINTS = {}
+
+
+def _entry_point(core):
+    """The compiled entry point of a core with one explicit signature (or the dispatcher)."""
+    ep = _ENTRY_POINTS.get(core)
+    if ep is None:
+        try:
+            (cres,) = core.overloads.values()
+            ep = cres.entry_point
+        except Exception:  # pragma: no cover - numba internals changed
+            ep = core
+        _ENTRY_POINTS[core] = ep
+    return ep
 
 
 # --------------------------------------------------------------------------------------------------
@@ -697,6 +757,9 @@ def _validate_state(y0):
 
 
 def _validate_tolerances(atol, rtol, n):
+    if isinstance(atol, float) and isinstance(rtol, float):  # fast path for plain scalars
+        if math.isfinite(atol) and math.isfinite(rtol) and rtol >= 0 and (atol > 0 or (atol == 0 and rtol > 0)):
+            return np.full(n, atol), np.full(n, rtol)
     a = _real_array(atol, "atol")
     r = _real_array(rtol, "rtol")
     for name, v in (("atol", a), ("rtol", r)):
@@ -769,27 +832,44 @@ def _validate_t_eval(t_eval, t0, t_end):
     return OUT_TEVAL, te
 
 
+_CHECKED = weakref.WeakKeyDictionary()  # dispatcher -> names of the signatures it was checked for
+
+
 def _jit_function(f, sig, name):
     """Check that f can be passed where a FunctionType of signature ``sig`` is expected."""
     if isinstance(f, CPUDispatcher):
-        existing = f.overloads.get(tuple(sig.args))
-        if existing is not None:
-            if existing.signature.return_type != sig.return_type:
-                raise TypeError(
-                    f"{name} must return {sig.return_type} (signature {sig}), but it returns "
-                    f"{existing.signature.return_type}; compile it with @njit(pnrotor.ode.{_SIG_NAMES[name]})")
-            return f
         try:
-            f.compile(sig)
-        except Exception as exc:
-            raise TypeError(
-                f"{name} must be a numba @njit function compilable with the signature {sig} "
-                f"(e.g. @njit(pnrotor.ode.{_SIG_NAMES[name]}, cache=True)): {exc}") from None
+            if name in _CHECKED.get(f, ()):
+                return f
+        except TypeError:  # pragma: no cover - not weak-referenceable
+            pass
+        _check_dispatcher(f, sig, name)
+        try:
+            _CHECKED.setdefault(f, set()).add(name)
+        except TypeError:  # pragma: no cover
+            pass
         return f
     if hasattr(f, "_numba_type_") and hasattr(f, "address"):  # a numba @cfunc
         return f
     raise TypeError(f"{name} must be a numba-compiled function, e.g. decorated with "
                     f"@njit(pnrotor.ode.{_SIG_NAMES[name]}, cache=True); got {type(f).__name__}")
+
+
+def _check_dispatcher(f, sig, name):
+    """Raise TypeError unless the dispatcher f has (or can compile) exactly the signature sig."""
+    existing = f.overloads.get(tuple(sig.args))
+    if existing is not None:
+        if existing.signature.return_type != sig.return_type:
+            raise TypeError(
+                f"{name} must return {sig.return_type} (signature {sig}), but it returns "
+                f"{existing.signature.return_type}; compile it with @njit(pnrotor.ode.{_SIG_NAMES[name]})")
+        return
+    try:
+        f.compile(sig)
+    except Exception as exc:
+        raise TypeError(
+            f"{name} must be a numba @njit function compilable with the signature {sig} "
+            f"(e.g. @njit(pnrotor.ode.{_SIG_NAMES[name]}, cache=True)): {exc}") from None
 
 
 _SIG_NAMES = {"rhs": "RHS_SIG", "after_step": "AFTER_STEP_SIG", "events": "EVENTS_SIG"}
@@ -917,7 +997,7 @@ def dop853(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None, max_ste
             raise ValueError("n_events must be 0 when no events function is given")
         if event_direction is not None:
             raise ValueError("event_direction given without an events function")
-        events_f = no_events
+        events_f = _default_hook("events")
     else:
         if n_events < 1:
             raise ValueError("n_events must be >= 1 when an events function is given")
@@ -933,14 +1013,15 @@ def dop853(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None, max_ste
             raise ValueError("event_direction values must be -1, 0 or +1")
         ev_dir = np.ascontiguousarray(ed, dtype=np.float64).copy()
     rhs_f = _jit_function(rhs, RHS_SIG, "rhs")
-    after_f = no_after_step if after_step is None else _jit_function(after_step, AFTER_STEP_SIG, "after_step")
+    after_f = _default_hook("after_step") if after_step is None else _jit_function(after_step, AFTER_STEP_SIG,
+                                                                                       "after_step")
 
     if t_end == t0:
         if dense:
             raise ValueError("dense=True needs t_end != t0 (there is no step to interpolate)")
         return _trivial_result(t0, y0, mode, te, "DOP853")
 
-    t_out, y_out, seg_t, seg_h, seg_c, iv, fv, y_ev = _dop853_core(
+    t_out, y_out, seg_t, seg_h, seg_c, iv, fv, y_ev = _entry_point(_dop853_core)(
         rhs_f, after_f, events_f, t0, y0, t_end, p, atol_a, rtol_a, fs, ms, max_steps,
         te, mode, dense, n_events, ev_dir, safety, min_factor, max_factor)
 
