@@ -1,0 +1,12 @@
+r"""Post-Newtonian evolution of precessing quasi-circular compact binaries with the rotor equation.
+
+Modules: :mod:`~pnrotor.pn.series` (truncated PN series with spin invariants),
+:mod:`~pnrotor.pn.energy`, :mod:`~pnrotor.pn.flux`, :mod:`~pnrotor.pn.precession` (the PN
+quantities, each coefficient beside its source), :mod:`~pnrotor.pn.system` (state layout, parameter
+vector, numba right-hand sides and events), :mod:`~pnrotor.pn.initial` (units, frequencies, frames)
+and :mod:`~pnrotor.pn.evolve` (``evolve`` → :class:`Evolution`).
+"""
+
+from .evolve import Evolution, evolve, lalsuite_orders
+
+__all__ = ["Evolution", "evolve", "lalsuite_orders"]

@@ -1,0 +1,470 @@
+r"""``evolve``: integrate the post-Newtonian system backward and forward from f_ref → :class:`Evolution`.
+
+One run:
+
+1. inputs → geometric units (:mod:`pnrotor.pn.initial`), t = 0 at the reference GW frequency f_ref,
+   Φ(0) = 0, n̂(0) = ``n_hat``, ℓ̂(0) = ``ell_hat``;
+2. choose the right-hand side: :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) for nonspinning
+   and aligned-spin binaries, :func:`~pnrotor.pn.system.rhs_precessing` (state
+   [v, χ₁, χ₂, R, Φ]) otherwise or when ``integrate_rotor=True``;
+3. integrate with DOP853 backward to f_min (if given) and forward to f_max or to termination, each
+   with terminal events; both halves share t = 0 and are stitched into one history;
+4. sample from the integrator's steps or its 7th-order dense output (never by shortening steps).
+
+Termination reasons (``Evolution.termination`` for the forward half, ``stats['termination_backward']``):
+
+* ``'f_max'`` / ``'f_min'`` — v reached the requested end frequency;
+* ``'v_max'`` — v reached 1 (no f_max given and nothing else stopped the inspiral first);
+* ``'energy_balance'`` — E′(v) ≥ 0: the binding energy no longer decreases with v;
+* ``'vdot_nonpositive'`` — v̇ ≤ 0 (for T1 this coincides with E′ → 0; for T4 the flux ratio vanishes);
+* ``'spin_magnitude'`` — |χᵢ| exceeded 1 (by more than 1e-10 in |χ|²);
+* ``'nonfinite'``, ``'max_steps'``, ``'step_underflow'`` — integrator failures;
+* ``'time_limit'`` — the generous time bound was reached (should not happen);
+* ``'final'`` — only with ``f_max``/``f_min`` None and a zero-length half (not integrated).
+"""
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..ode import dop853
+from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
+                          STATUS_SUCCESS)
+from . import initial as _ini
+from . import system as _sys
+from .series import (B_A1, B_A2, MAX_ORDER, basis_values, evaluate, fold_basis, kmax_from_orders)
+
+TERMINATION_MESSAGES = {
+    "f_max": "v reached the requested end frequency f_max",
+    "f_min": "v reached the requested start frequency f_min",
+    "v_max": "v reached v_max = 1",
+    "energy_balance": "E'(v) >= 0: the PN binding energy stopped decreasing (energy balance breaks down)",
+    "vdot_nonpositive": "dv/dt <= 0: the PN energy balance gives no inspiral",
+    "spin_magnitude": "|chi_i| exceeded 1",
+    "nonfinite": "the state or its derivative became non-finite",
+    "max_steps": "the integrator reached its step limit",
+    "step_underflow": "the integrator's step size underflowed",
+    "time_limit": "the time bound of the integration was reached before any termination condition",
+    "not_integrated": "this half was not integrated (no f_min given)",
+}
+
+MAX_SO_ORDER = 4.0
+MAX_SS_ORDER = 3.0
+
+
+@dataclass
+class Evolution:
+    """History of a PN evolution: plain arrays and scalars (HDF5-friendly).
+
+    Attributes
+    ----------
+    t : (N,) times in units of the total mass M (t = 0 at f_ref)
+    t_seconds : (N,) the same in seconds
+    v : (N,) PN parameter v = (M Ω_orb)^{1/3}
+    Phi : (N,) orbital phase Φ (Φ = 0 at t = 0)
+    chi1, chi2 : (N, 3) dimensionless spins in the inertial frame
+    R : (N, 4) unit orbital-frame rotor (w, x, y, z), sign-continuous: n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹
+    ell_hat : (N, 3) orbital angular momentum direction ℓ̂ = R ẑ R⁻¹
+    termination : str — why the forward integration stopped (see module docstring)
+    stats : dict — nfev, nsteps, naccepted, nrejected (both halves), per-half counts, wall times,
+        backward termination, messages
+    inputs : dict — every input, with units in the key names
+    """
+
+    t: np.ndarray
+    t_seconds: np.ndarray
+    v: np.ndarray
+    Phi: np.ndarray
+    chi1: np.ndarray
+    chi2: np.ndarray
+    R: np.ndarray
+    ell_hat: np.ndarray
+    termination: str
+    stats: dict = field(default_factory=dict)
+    inputs: dict = field(default_factory=dict)
+
+    @property
+    def n_hat(self):
+        """Separation direction n̂ = R x̂ R⁻¹, (N, 3)."""
+        w, x, y, z = self.R.T
+        return np.column_stack((1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)))
+
+    @property
+    def f_gw(self):
+        """Gravitational-wave frequency 2 f_orb = v³/(π M) in Hz."""
+        return _ini.frequency_from_v(self.v, self.inputs["M_seconds"])
+
+    def __len__(self):
+        return self.t.size
+
+
+# ---------------------------------------------------------------------------------------------------
+# helpers
+# ---------------------------------------------------------------------------------------------------
+
+def _normalize_approximant(approximant):
+    a = str(approximant).strip()
+    for prefix in ("SpinTaylor", "Taylor"):
+        if a.startswith(prefix):
+            a = a[len(prefix):]
+    a = a.upper()
+    if a not in _sys.APPROXIMANTS:
+        raise ValueError(f"approximant must be one of T1, T4, T5 (or TaylorTn / SpinTaylorTn), got {approximant!r}")
+    return a
+
+
+def _order(x, name, lo, hi, allow_none=False):
+    if x is None:
+        if allow_none:
+            return None
+        raise ValueError(f"{name} is required")
+    x = float(x)
+    if not (lo <= x <= hi) or abs(2 * x - round(2 * x)) > 1e-12:
+        raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {x!r}")
+    return x
+
+
+def _parse_sampling(sampling):
+    """→ ('steps', None) | ('final', None) | ('dt', seconds) | ('per_orbit', n)."""
+    if isinstance(sampling, str):
+        s = sampling.strip().lower()
+        if s in ("steps", "step", "accepted"):
+            return "steps", None
+        if s == "final":
+            return "final", None
+        raise ValueError(f"sampling string must be 'steps' or 'final', got {sampling!r}")
+    if isinstance(sampling, dict):
+        if len(sampling) != 1:
+            raise ValueError("sampling dict must have exactly one key: 'dt' or 'per_orbit'")
+        (key, val), = sampling.items()
+        sampling = (key, val)
+    if isinstance(sampling, tuple):
+        if len(sampling) != 2:
+            raise ValueError("sampling tuple must be ('dt', seconds) or ('per_orbit', n)")
+        key, val = sampling
+        if key == "dt":
+            return "dt", _ini.seconds(val, "sampling dt")
+        if key == "per_orbit":
+            if isinstance(val, bool) or int(val) != val or int(val) < 1:
+                raise ValueError(f"points per orbit must be a positive integer, got {val!r}")
+            return "per_orbit", int(val)
+        raise ValueError(f"unknown sampling key {key!r}; use 'dt' or 'per_orbit'")
+    # a bare number or Quantity: Δt in seconds
+    return "dt", _ini.seconds(sampling, "sampling dt")
+
+
+def _status_to_termination(res, direction):
+    if res.status == STATUS_EVENT:
+        idx = res.event_index
+        if idx == _sys.EV_V_END:
+            return direction
+        return {_sys.EV_ENERGY: "energy_balance", _sys.EV_VDOT: "vdot_nonpositive",
+                _sys.EV_SPIN1: "spin_magnitude", _sys.EV_SPIN2: "spin_magnitude"}[idx]
+    return {STATUS_SUCCESS: "time_limit", STATUS_MAX_STEPS: "max_steps",
+            STATUS_STEP_UNDERFLOW: "step_underflow", STATUS_NONFINITE: "nonfinite"}[res.status]
+
+
+def _rotor_times_z_phase(Rp, Phi):
+    """R = R_p · exp(Φ ẑ/2) for arrays R_p (N, 4) and Φ (N,) (Hamilton product with (cos Φ/2, 0, 0, sin Φ/2))."""
+    c = np.cos(0.5 * Phi)
+    s = np.sin(0.5 * Phi)
+    w, x, y, z = Rp[:, 0], Rp[:, 1], Rp[:, 2], Rp[:, 3]
+    return np.column_stack((w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s))
+
+
+def _ell_from_R(R):
+    w, x, y, z = R.T
+    m = w * w + x * x + y * y + z * z
+    return np.column_stack((2.0 * (x * z + w * y) / m, 2.0 * (y * z - w * x) / m, (w * w - x * x - y * y + z * z) / m))
+
+
+def _states_to_history(Y, aligned, rotor, R0, chi1_0, chi2_0):
+    """(v, Φ, χ₁, χ₂, R unit, ℓ̂) from state rows Y."""
+    n = Y.shape[0]
+    if aligned:
+        v = Y[:, _sys.YA_V]
+        Phi = Y[:, _sys.YA_PHI]
+        R = _rotor_times_z_phase(np.broadcast_to(R0, (n, 4)), Phi)
+        chi1 = np.broadcast_to(chi1_0, (n, 3)).copy()
+        chi2 = np.broadcast_to(chi2_0, (n, 3)).copy()
+    else:
+        v = Y[:, _sys.Y_V]
+        Phi = Y[:, _sys.Y_PHI]
+        Rs = Y[:, _sys.Y_R:_sys.Y_R + 4]
+        R = Rs if rotor == "orbital" else _rotor_times_z_phase(Rs, Phi)
+        chi1 = Y[:, _sys.Y_CHI1:_sys.Y_CHI1 + 3].copy()
+        chi2 = Y[:, _sys.Y_CHI2:_sys.Y_CHI2 + 3].copy()
+    R = R / np.sqrt(np.sum(R * R, axis=1))[:, None]
+    return v.copy(), Phi.copy(), chi1, chi2, R, _ell_from_R(R)
+
+
+def _phase_times(dense, phi_index, v_index, targets):
+    """Times at which Φ(t) (monotonic along the integration) equals each target: Newton on the dense
+    output with Φ̇ ≈ v³, starting from linear interpolation between step boundaries."""
+    if targets.size == 0:
+        return targets
+    ts = dense.ts
+    phis = dense(ts)[:, phi_index]
+    order = np.argsort(phis)
+    ts_o, ph_o = ts[order], phis[order]
+    t = np.interp(targets, ph_o, ts_o)
+    lo, hi = min(dense.t_min, dense.t_max), max(dense.t_min, dense.t_max)
+    for _ in range(8):
+        y = dense(t)
+        dphi = y[:, phi_index] - targets
+        t_new = np.clip(t - dphi / y[:, v_index] ** 3, lo, hi)
+        if np.all(np.abs(t_new - t) <= 4e-16 * np.maximum(np.abs(t), 1.0)):
+            t = t_new
+            break
+        t = t_new
+    return t
+
+
+# ---------------------------------------------------------------------------------------------------
+# evolve
+# ---------------------------------------------------------------------------------------------------
+
+def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4", pn_order=3.5,
+           spin_orbit_order=None, spin_spin_order=None, ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0),
+           kappa1=1.0, kappa2=1.0, atol=1e-12, rtol=0.0, sampling="steps", rotor="coprecessing",
+           precession_phase_shift=None, integrate_rotor=False, max_steps=2_000_000):
+    r"""Evolve a quasi-circular (precessing) compact binary in post-Newtonian theory.
+
+    Parameters
+    ----------
+    m1, m2 : float or astropy Quantity
+        Component masses (floats are solar masses).
+    chi1, chi2 : array_like (3,)
+        Dimensionless spins at f_ref, inertial frame, |χᵢ| ≤ 1.
+    f_ref : float or Quantity
+        Gravitational-wave frequency (2 × orbital, Hz) at t = 0, where the inputs are given.
+    f_min : float or Quantity, optional
+        Integrate backward from f_ref down to this GW frequency (< f_ref).  None: start at f_ref.
+    f_max : float or Quantity, optional
+        Stop the forward integration at this GW frequency (> f_ref).  None: integrate until the PN
+        energy balance terminates the inspiral (or v = 1).
+    approximant : {'T1', 'T4', 'T5'}
+        TaylorT1 (−F/E′ evaluated as a ratio), TaylorT4 (ratio re-expanded, truncated), TaylorT5 (its
+        inverse re-expanded, truncated).  'TaylorT4' and 'SpinTaylorT4' are accepted too.
+    pn_order : float
+        PN order of the nonspinning terms, 0 … 4.5 in steps of 0.5.
+    spin_orbit_order, spin_spin_order : float, optional
+        PN orders of the terms linear and quadratic in the spins (default min(pn_order, 4) and
+        min(pn_order, 3); −1 removes them).  They also select the precession terms (spin-orbit
+        LO/NLO/NNLO at ≥ 1.5/2.5/3.5, spin-spin at ≥ 2/3).  :func:`lalsuite_orders` gives the
+        truncation of LALSuite's SpinTaylorTn.
+    ell_hat, n_hat : array_like (3,)
+        ℓ̂ and n̂ at t = 0 (unit, orthogonal to 1e-8; made exactly orthonormal).
+    kappa1, kappa2 : float
+        Spin-induced quadrupole constants (1 for black holes).
+    atol, rtol : float
+        DOP853 tolerances (absolute on every state component; relative).
+    sampling : 'steps' | 'final' | float | Quantity | ('dt', Δt) | ('per_orbit', n)
+        Output at every accepted step, only the final state, uniformly in time with step Δt seconds
+        (at t = k Δt, t = 0 at f_ref, as LALSuite's grid from fStart), or n points per orbit
+        (Φ = 2πj/n).  Uniform and per-orbit samples come from the dense output.
+    rotor : {'coprecessing', 'orbital'}
+        Which rotor the precessing state holds (see :mod:`pnrotor.pn.system`): the co-precessing R_p
+        with R = R_p exp(Φẑ/2) (default, fast) or the full orbital-frame R.
+    precession_phase_shift : bool, optional
+        Apply Φ̇ = v³ − |Ω_ℓ,LO|²/(4v³) (arXiv:1507.00406).  Default: when spin_orbit_order ≥ 3.
+    integrate_rotor : bool
+        Use the precessing state even for nonspinning/aligned binaries.
+    max_steps : int
+        Step limit per half.
+
+    Returns
+    -------
+    Evolution
+    """
+    wall0 = time.perf_counter()
+    # ---- inputs → geometric units -------------------------------------------------------------
+    m1 = _ini.solar_masses(m1, "m1")
+    m2 = _ini.solar_masses(m2, "m2")
+    f_ref = _ini.hertz(f_ref, "f_ref")
+    f_min = _ini.hertz(f_min, "f_min", allow_none=True)
+    f_max = _ini.hertz(f_max, "f_max", allow_none=True)
+    c1 = _ini.spin_vector(chi1, "chi1")
+    c2 = _ini.spin_vector(chi2, "chi2")
+    ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
+    approximant = _normalize_approximant(approximant)
+    pn_order = _order(pn_order, "pn_order", 0.0, MAX_ORDER)
+    so_order = (min(pn_order, MAX_SO_ORDER) if spin_orbit_order is None
+                else _order(spin_orbit_order, "spin_orbit_order", -1.0, MAX_SO_ORDER))
+    ss_order = (min(pn_order, MAX_SS_ORDER) if spin_spin_order is None
+                else _order(spin_spin_order, "spin_spin_order", -1.0, MAX_SS_ORDER))
+    kappa1 = float(kappa1)
+    kappa2 = float(kappa2)
+    if rotor not in ("coprecessing", "orbital"):
+        raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
+    mode, sval = _parse_sampling(sampling)
+    if not (atol > 0.0 and math.isfinite(atol)) or not (rtol >= 0.0 and math.isfinite(rtol)):
+        raise ValueError("atol must be > 0 and rtol >= 0, both finite")
+    if precession_phase_shift is None:
+        precession_phase_shift = so_order >= 3.0
+
+    M_sec = _ini.total_mass_seconds(m1, m2)
+    X1 = m1 / (m1 + m2)
+    nu = X1 * (1.0 - X1)
+    v0 = _ini.v_from_frequency(f_ref, M_sec)
+    v_min = None if f_min is None else _ini.v_from_frequency(f_min, M_sec)
+    v_max = 1.0 if f_max is None else _ini.v_from_frequency(f_max, M_sec)
+    if v0 >= 1.0:
+        raise ValueError(f"f_ref = {f_ref} Hz gives v = {v0:.4g} >= 1")
+    if v_min is not None and not v_min < v0:
+        raise ValueError(f"f_min = {f_min} Hz must be below f_ref = {f_ref} Hz")
+    if not v_max > v0:
+        raise ValueError(f"f_max = {f_max} Hz must be above f_ref = {f_ref} Hz")
+    R0 = _ini.frame_rotor(ell, n)
+
+    perp1 = c1 - np.dot(c1, ell) * ell
+    perp2 = c2 - np.dot(c2, ell) * ell
+    nonspinning = not np.any(c1) and not np.any(c2)
+    aligned = np.dot(perp1, perp1) <= 1e-28 and np.dot(perp2, perp2) <= 1e-28
+    use_aligned = aligned and not integrate_rotor
+    spin_content = "nonspinning" if nonspinning else ("aligned" if aligned else "precessing")
+    if aligned:  # remove round-off in-plane parts so the spins are exactly along ℓ̂
+        c1 = np.dot(c1, ell) * ell
+        c2 = np.dot(c2, ell) * ell
+
+    kmax = kmax_from_orders(pn_order, so_order, ss_order)
+    a1, a2 = float(np.dot(ell, c1)), float(np.dot(ell, c2))
+    bvals = basis_values(a1, a2, float(np.dot(c1, c2)), float(np.dot(c1, c1)), float(np.dot(c2, c2)))
+    p = _sys.make_parameters(X1, approximant, kmax, so_order=so_order, ss_order=ss_order, kappa1=kappa1,
+                             kappa2=kappa2, v_end=v_max, rotor=rotor, phase_shift=precession_phase_shift,
+                             aligned_basis=bvals if use_aligned else None)
+
+    # ---- validity at f_ref -------------------------------------------------------------------------
+    N, D, Ep = _sys.vdot_series(X1, approximant, kmax, kappa1, kappa2)
+    n0, d0, e0 = (float(evaluate(S, v0, bvals)) for S in (N, D, Ep))
+    if not e0 > 0.0:
+        raise ValueError(f"E'(v) >= 0 at f_ref (v = {v0:.4g}): the PN energy balance is invalid there")
+    if not n0 * d0 > 0.0:
+        raise ValueError(f"dv/dt <= 0 at f_ref (v = {v0:.4g}) for {approximant}")
+
+    inputs = {
+        "m1_Msun": m1, "m2_Msun": m2, "chi1": c1.tolist(), "chi2": c2.tolist(), "f_ref_Hz": f_ref,
+        "f_min_Hz": f_min, "f_max_Hz": f_max, "approximant": approximant, "pn_order": pn_order,
+        "spin_orbit_order": so_order, "spin_spin_order": ss_order, "ell_hat": ell.tolist(),
+        "n_hat": n.tolist(), "kappa1": kappa1, "kappa2": kappa2, "atol": float(atol), "rtol": float(rtol),
+        "sampling": mode, "sampling_value": sval, "rotor": rotor,
+        "precession_phase_shift": bool(precession_phase_shift), "integrate_rotor": bool(integrate_rotor),
+        "max_steps": int(max_steps), "M_seconds": M_sec, "v_ref": v0, "spin_content": spin_content,
+        "state": "aligned" if use_aligned else "precessing",
+    }
+
+    if use_aligned:
+        rhs, events = _sys.rhs_aligned, _sys.events_aligned
+        y0 = np.array([v0, 0.0])
+    else:
+        rhs, events = _sys.rhs_precessing, _sys.events_precessing
+        y0 = np.concatenate(([v0], c1, c2, R0, [0.0]))
+
+    want_dense = mode in ("dt", "per_orbit")
+    t_eval = "final" if mode == "final" else None
+    tau0 = _ini.newtonian_time_to_coalescence(v0, nu)
+
+    # ---- forward ---------------------------------------------------------------------------------
+    t_int = time.perf_counter()
+    res_f = dop853(rhs, 0.0, y0, 4.0 * tau0 + 1.0e4, atol, rtol=rtol, args=p, max_steps=max_steps,
+                   t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS,
+                   event_direction=np.array([1.0, 0.0, 0.0, 0.0, 0.0]))
+    term_f = _status_to_termination(res_f, "f_max" if f_max is not None else "v_max")
+    # ---- backward --------------------------------------------------------------------------------
+    res_b = None
+    term_b = "not_integrated"
+    if v_min is not None:
+        pb = p.copy()
+        pb[_sys.P_VEND] = v_min
+        t_back = -(2.0 * (_ini.newtonian_time_to_coalescence(v_min, nu) - tau0) + 1.0e4)
+        res_b = dop853(rhs, 0.0, y0, t_back, atol, rtol=rtol, args=pb, max_steps=max_steps,
+                       t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS,
+                       event_direction=np.array([-1.0, 0.0, 0.0, 0.0, 0.0]))
+        term_b = _status_to_termination(res_b, "f_min")
+    t_int = time.perf_counter() - t_int
+
+    # ---- sampling --------------------------------------------------------------------------------
+    phi_i = _sys.YA_PHI if use_aligned else _sys.Y_PHI
+    v_i = _sys.YA_V
+    if mode == "final":
+        t_out = np.array([res_f.t[-1]])
+        Y = res_f.y[-1:]
+    elif mode == "steps":
+        if res_b is not None:
+            t_out = np.concatenate((res_b.t[:0:-1], res_f.t))
+            Y = np.concatenate((res_b.y[:0:-1], res_f.y))
+        else:
+            t_out, Y = res_f.t, res_f.y
+    else:
+        if mode == "dt":
+            dt = sval / M_sec
+            k_hi = math.floor(res_f.dense.t_max / dt * (1.0 + 1e-15))
+            tf = np.arange(0, k_hi + 1) * dt
+            tf = tf[tf <= res_f.dense.t_max]
+            if res_b is not None:
+                k_lo = math.ceil(res_b.dense.t_max / dt * (1.0 + 1e-15))
+                tb = np.arange(k_lo, 0) * dt
+                tb = tb[tb >= res_b.dense.t_max]
+            else:
+                tb = np.empty(0)
+        else:  # per_orbit
+            step = 2.0 * math.pi / sval
+            phi_end = res_f.y[-1, phi_i]
+            targets_f = np.arange(0, math.floor(phi_end / step) + 1) * step
+            tf = _phase_times(res_f.dense, phi_i, v_i, targets_f)
+            tf[0] = 0.0
+            if res_b is not None:
+                phi_start = res_b.y[-1, phi_i]
+                targets_b = np.arange(math.ceil(phi_start / step), 0) * step
+                tb = _phase_times(res_b.dense, phi_i, v_i, targets_b)
+            else:
+                tb = np.empty(0)
+        Yf = res_f.dense(tf)
+        Yb = res_b.dense(tb) if tb.size else np.empty((0, y0.size))
+        t_out = np.concatenate((tb, tf))
+        Y = np.concatenate((Yb, Yf))
+
+    v, Phi, x1, x2, R, ellh = _states_to_history(Y, use_aligned, rotor, R0, c1, c2)
+
+    halves = {"forward": res_f, "backward": res_b}
+    stats = {}
+    for key in ("nfev", "nsteps", "naccepted", "nrejected"):
+        stats[key] = sum(getattr(r, key) for r in halves.values() if r is not None)
+        for name, r in halves.items():
+            stats[f"{key}_{name}"] = getattr(r, key) if r is not None else 0
+    stats["termination_backward"] = term_b
+    stats["termination_message"] = TERMINATION_MESSAGES[term_f]
+    stats["termination_backward_message"] = TERMINATION_MESSAGES[term_b]
+    stats["integrator_message_forward"] = res_f.message
+    stats["integrator_message_backward"] = res_b.message if res_b is not None else ""
+    stats["t_final"] = float(res_f.t[-1])
+    stats["v_final"] = float(res_f.y[-1, 0])
+    stats["t_initial"] = float(res_b.t[-1]) if res_b is not None else 0.0
+    stats["wall_time_integrate_s"] = t_int
+    stats["wall_time_s"] = time.perf_counter() - wall0
+
+    return Evolution(t=np.asarray(t_out, dtype=np.float64), t_seconds=np.asarray(t_out) * M_sec, v=v, Phi=Phi,
+                     chi1=x1, chi2=x2, R=R, ell_hat=ellh, termination=term_f, stats=stats, inputs=inputs)
+
+
+def lalsuite_orders(approximant, phaseO=7, spinO=-1):
+    """Our truncation equivalent to LALSuite's SpinTaylorTn (``SimInspiralSpinTaylorPNEvolveOrbit``).
+
+    With phaseO = 7 (3.5PN), spinO = −1 (all), tideO = 0, lscorr = 0, quadparam = κ:
+
+    * SpinTaylorT4 / T5: nonspinning to 3.5PN; spin-orbit in v̇ to 3PN (LALSuite's 3.5PN spin-orbit
+      coefficients are set only for its IMRPhenomTP path and not used by SpinTaylor); spin² to 3PN,
+      orbit averaged; precession: spin-orbit LO + NLO, spin-spin 2PN + 3PN, |L| with its 1PN term;
+      phase shift on.  → pn_order 3.5, spin_orbit_order 3.0, spin_spin_order 3.0.
+    * SpinTaylorT1: as T4, but its flux omits the 3PN spin-orbit (tail) term (it is computed in the
+      setup but not added in the derivative) → spin_orbit_order 2.5, with the phase shift still on
+      (LALSuite applies it for spinO = −1).  Its 3PN QM (ℓ̂·S)² flux coefficient differs from ours
+      (see :mod:`pnrotor.pn.flux`).
+    """
+    a = _normalize_approximant(approximant)
+    if spinO != -1 or phaseO not in (7, -1):
+        raise ValueError("only phaseO = 7 (or -1) with spinO = -1 is mapped")
+    return {"pn_order": 3.5, "spin_orbit_order": 2.5 if a == "T1" else 3.0, "spin_spin_order": 3.0,
+            "precession_phase_shift": True}

@@ -1,0 +1,149 @@
+r"""Gravitational-wave energy flux F(v) of a quasi-circular compact binary.
+
+Units G = c = M = 1, notation as in :mod:`pnrotor.pn.energy`.  We write
+
+    F(v) = (32/5) ν² v¹⁰ F̂(v),     F̂ = Σ_k v^k Σ_b B_b (f[k,b,0] + f[k,b,1] ln v).
+
+Sources, term by term:
+
+* nonspinning through 3.5PN: Blanchet, Living Rev. Rel. 17, 2 (2014), arXiv:1310.1528, Eq. (314);
+  4PN and 4.5PN: Blanchet, Faye, Henry, Larrouturou & Trestini, PRD 108, 064041 (2023),
+  arXiv:2304.11186 (the complete 4.5PN flux; Eq. (6.11) as cited by PostNewtonian.jl).  In all of
+  them ln(16x) and ln x are rewritten with x = v²: ln(16x) = 4 ln 2 + 2 ln v.
+* spin-orbit, 1.5PN, 2.5PN, 3PN (tail), 3.5PN, 4PN (tail): Marsat, Bohé, Blanchet & Buonanno,
+  CQG 31, 025023 (2014), arXiv:1307.6793, Eq. (4.9), in s_ℓ, σ_ℓ.
+* quadratic in spin, 2PN and 3PN: Bohé, Faye, Marsat & Porter (2015), arXiv:1501.01529
+  (Eq. (4.12) in the n̂, λ̂, ℓ̂ decomposition as cited by LALSuite; 2PN S₁S₂ of Kidder 1995 and
+  quadrupole-monopole of Poisson 1998 included there), orbit averaged with
+  ⟨nⁱnʲ⟩ = ⟨λⁱλʲ⟩ = ½(δⁱʲ − ℓⁱℓʲ).  Checked in the tests against the aligned-spin form, Eq. (4.14)
+  of arXiv:1501.01529.
+
+Note on LALSuite: its orbit-averaged 3PN quadrupole-monopole coefficient of (ℓ̂·Sᵢ)²,
+``XLALSimInspiralPNFlux_6PNQMS1OS1OCoeffAvg``, has the constant 12.9/8 = 129/80 where the
+average of its own instantaneous coefficients (and Eq. (4.14) of arXiv:1501.01529 for aligned spins)
+give 129/8.  Only SpinTaylorT1 uses that function (T4/T5 use separately derived coefficients that
+agree with 129/8); we use 129/8, so SpinTaylorT1 with spins differs from LALSuite by this term.
+"""
+
+import math
+
+import numpy as np
+
+from .energy import EULER_GAMMA, LN2, PI2, add_spin_spin, sl_sigma_to_basis
+from .series import B_A1, B_A2, B_ONE, new_series
+
+PI = math.pi
+LN3 = math.log(3.0)
+
+
+def nonspinning_flux_coefficients(nu):
+    """(f, flog): F̂ coefficients of v^k and of v^k ln v, nonspinning, through 4.5PN."""
+    f = np.zeros(10)
+    flog = np.zeros(10)
+    f[0] = 1.0
+    # 1PN: −1247/336 − 35ν/12                                    [Blanchet 2014, Eq. (314)]
+    f[2] = -1247.0 / 336.0 - 35.0 / 12.0 * nu
+    # 1.5PN: 4π (leading tail)                                    [Blanchet 2014, Eq. (314)]
+    f[3] = 4.0 * PI
+    # 2PN: −44711/9072 + 9271ν/504 + 65ν²/18                     [Blanchet 2014, Eq. (314)]
+    f[4] = -44711.0 / 9072.0 + 9271.0 / 504.0 * nu + 65.0 / 18.0 * nu ** 2
+    # 2.5PN: (−8191/672 − 583ν/24)π                              [Blanchet 2014, Eq. (314)]
+    f[5] = (-8191.0 / 672.0 - 583.0 / 24.0 * nu) * PI
+    # 3PN: 6643739519/69854400 + 16π²/3 − 1712γ_E/105 − 856/105 ln(16x)
+    #      + (−134543/7776 + 41π²/48)ν − 94403ν²/3024 − 775ν³/324   [Blanchet 2014, Eq. (314)]
+    f[6] = (6643739519.0 / 69854400.0 + 16.0 * PI2 / 3.0 - 1712.0 / 105.0 * (EULER_GAMMA + 2.0 * LN2)
+            + (-134543.0 / 7776.0 + 41.0 * PI2 / 48.0) * nu - 94403.0 / 3024.0 * nu ** 2
+            - 775.0 / 324.0 * nu ** 3)
+    flog[6] = -1712.0 / 105.0
+    # 3.5PN: (−16285/504 + 214745ν/1728 + 193385ν²/3024)π          [Blanchet 2014, Eq. (314)]
+    f[7] = (-16285.0 / 504.0 + 214745.0 / 1728.0 * nu + 193385.0 / 3024.0 * nu ** 2) * PI
+    # 4PN: −323105549467/3178375200 + 232597γ_E/4410 − 1369π²/126 + 39931 ln2/294 − 47385 ln3/1568
+    #      + 232597/8820 ln x
+    #      + ν(−1452202403629/1466942400 + 41478γ_E/245 − 267127π²/4608 + 479062 ln2/2205
+    #          + 47385 ln3/392 + 20739/245 ln x)
+    #      + ν²(1607125/6804 − 3157π²/384) + 6875ν³/504 + 5ν⁴/6          [Blanchet+ 2023, arXiv:2304.11186]
+    f[8] = (-323105549467.0 / 3178375200.0 + 232597.0 / 4410.0 * EULER_GAMMA - 1369.0 * PI2 / 126.0
+            + 39931.0 / 294.0 * LN2 - 47385.0 / 1568.0 * LN3
+            + (-1452202403629.0 / 1466942400.0 + 41478.0 / 245.0 * EULER_GAMMA - 267127.0 * PI2 / 4608.0
+               + 479062.0 / 2205.0 * LN2 + 47385.0 / 392.0 * LN3) * nu
+            + (1607125.0 / 6804.0 - 3157.0 * PI2 / 384.0) * nu ** 2
+            + 6875.0 / 504.0 * nu ** 3 + 5.0 / 6.0 * nu ** 4)
+    flog[8] = 232597.0 / 4410.0 + 41478.0 / 245.0 * nu
+    # 4.5PN: π[265978667519/745113600 − 6848γ_E/105 − 3424/105 ln(16x)
+    #          + (2062241/22176 + 41π²/12)ν − 133112905ν²/290304 − 3719141ν³/38016]
+    #                                                              [Blanchet+ 2023, arXiv:2304.11186]
+    f[9] = PI * (265978667519.0 / 745113600.0 - 6848.0 / 105.0 * (EULER_GAMMA + 2.0 * LN2)
+                 + (2062241.0 / 22176.0 + 41.0 * PI2 / 12.0) * nu - 133112905.0 / 290304.0 * nu ** 2
+                 - 3719141.0 / 38016.0 * nu ** 3)
+    flog[9] = -6848.0 / 105.0 * PI
+    return f, flog
+
+
+def spin_orbit_flux_sl_sigma(nu):
+    """{k: (c_s, c_σ)} with F̂ ∋ v^k (c_s s_ℓ + c_σ δ σ_ℓ).   Marsat+ 2014, arXiv:1307.6793, Eq. (4.9)."""
+    return {
+        # 1.5PN: −4 s_ℓ − 5/4 δσ_ℓ                                   [Marsat+ 2014, Eq. (4.9)]
+        3: (-4.0, -1.25),
+        # 2.5PN: (−9/2 + 272ν/9) s_ℓ + (−13/16 + 43ν/4) δσ_ℓ           [Marsat+ 2014, Eq. (4.9)]
+        5: (-4.5 + 272.0 * nu / 9.0, -13.0 / 16.0 + 43.0 * nu / 4.0),
+        # 3PN (tail): −16π s_ℓ − 31π/6 δσ_ℓ                            [Marsat+ 2014, Eq. (4.9)]
+        6: (-16.0 * PI, -31.0 * PI / 6.0),
+        # 3.5PN: (476645/6804 + 6172ν/189 − 2810ν²/27) s_ℓ
+        #        + (9535/336 + 1849ν/126 − 1501ν²/36) δσ_ℓ              [Marsat+ 2014, Eq. (4.9)]
+        7: (476645.0 / 6804.0 + 6172.0 * nu / 189.0 - 2810.0 * nu ** 2 / 27.0,
+            9535.0 / 336.0 + 1849.0 * nu / 126.0 - 1501.0 * nu ** 2 / 36.0),
+        # 4PN (tail): (−3485/96 + 13879ν/72)π s_ℓ + (−7163/672 + 130583ν/2016)π δσ_ℓ
+        #                                                              [Marsat+ 2014, Eq. (4.9)]
+        8: ((-3485.0 / 96.0 + 13879.0 * nu / 72.0) * PI,
+            (-7163.0 / 672.0 + 130583.0 * nu / 2016.0) * PI),
+    }
+
+
+def spin_spin_flux_per_body(X, kappa):
+    """Orbit-averaged self-spin + QM flux coefficients of body i: {k: (c_SS, c_LL)},
+    F̂ ∋ v^k [c_SS Sᵢ·Sᵢ + c_LL (ℓ̂·Sᵢ)²], Sᵢ = X²χᵢ."""
+    return {
+        # 2PN, averaged — self-spin: 7/(96X²) Sᵢ² − 1/(96X²)(ℓ̂·Sᵢ)²;
+        #   quadrupole-monopole (κ): −1/X² Sᵢ² + 3/X² (ℓ̂·Sᵢ)²    [arXiv:1303.7412, Eq. (3.13) and
+        #   Bohé+ 2015, Eq. (4.12) (as cited by LALSuite); Poisson 1998 for the QM part]
+        4: (7.0 / (96.0 * X ** 2) - kappa / X ** 2,
+            -1.0 / (96.0 * X ** 2) + 3.0 * kappa / X ** 2),
+        # 3PN, averaged — self-spin: (189/(16X²) − 35/(144X) + 47/144) Sᵢ²
+        #                          + (−239/(16X²) + 293/(144X) + 299/144)(ℓ̂·Sᵢ)²;
+        #   QM (κ): (279/(112X²) + 45/(16X) − 43/8) Sᵢ² + (−837/(112X²) − 135/(16X) + 129/8)(ℓ̂·Sᵢ)²
+        #                                                         [Bohé+ 2015, arXiv:1501.01529, Eq. (4.12)]
+        6: ((189.0 / (16.0 * X ** 2) - 35.0 / (144.0 * X) + 47.0 / 144.0)
+            + kappa * (279.0 / (112.0 * X ** 2) + 45.0 / (16.0 * X) - 43.0 / 8.0),
+            (-239.0 / (16.0 * X ** 2) + 293.0 / (144.0 * X) + 299.0 / 144.0)
+            + kappa * (-837.0 / (112.0 * X ** 2) - 135.0 / (16.0 * X) + 129.0 / 8.0)),
+    }
+
+
+def spin1_spin2_flux(nu):
+    """Orbit-averaged S₁S₂ flux coefficients {k: (c_S12, c_L12)}."""
+    return {
+        # 2PN, averaged: −103/(48ν) S₁·S₂ + 289/(48ν)(ℓ̂·S₁)(ℓ̂·S₂)   [Kidder 1995, gr-qc/9506022;
+        #   in the n̂, λ̂ form of Bohé, Marsat & Blanchet 2013, arXiv:1303.7412, Eq. (3.13) (as cited by
+        #   LALSuite) and Bohé+ 2015, Eq. (4.12); averaged as in Racine+ 2009 App. B]
+        4: (-103.0 / (48.0 * nu), 289.0 / (48.0 * nu)),
+        # 3PN, averaged: (2123/(84ν) + 821/72) S₁·S₂ + (−5647/(168ν) − 2023/72)(ℓ̂·S₁)(ℓ̂·S₂)
+        #                                                           [Bohé+ 2015, arXiv:1501.01529, Eq. (4.12)]
+        6: (2123.0 / (84.0 * nu) + 821.0 / 72.0, -5647.0 / (168.0 * nu) - 2023.0 / 72.0),
+    }
+
+
+def flux_series(X1, kappa1=1.0, kappa2=1.0):
+    """F̂(v): every known term (nonspinning to 4.5PN, spin-orbit to 4PN, spin² to 3PN), untruncated."""
+    X2 = 1.0 - X1
+    nu = X1 * X2
+    C = new_series()
+    f, flog = nonspinning_flux_coefficients(nu)
+    C[:, B_ONE, 0] = f
+    C[:, B_ONE, 1] = flog
+    for k, (cs, csig) in spin_orbit_flux_sl_sigma(nu).items():
+        c1, c2 = sl_sigma_to_basis(X1, X2, cs, csig)
+        C[k, B_A1, 0] += c1
+        C[k, B_A2, 0] += c2
+    add_spin_spin(C, X1, X2, spin_spin_flux_per_body(X1, kappa1), spin_spin_flux_per_body(X2, kappa2),
+                  spin1_spin2_flux(nu))
+    return C

@@ -1,0 +1,128 @@
+r"""Boundary between physical units and the geometric units of the PN system; frames and validation.
+
+* Masses in solar masses (floats) or astropy mass Quantities; frequencies in Hz (floats) or astropy
+  frequency Quantities; times returned in seconds and in units of M.
+* G M☉/c³ in seconds from astropy's IAU 2015 nominal GM☉ (the same value as LALSuite's
+  ``LAL_MTSUN_SI`` = 4.925490947641267e-6 s).
+* f is the *gravitational-wave* frequency, twice the orbital one: v = (π M f)^{1/3}.
+* The initial frame: ℓ̂ (orbital angular momentum direction) and n̂ (separation direction, from body
+  2 to body 1 as in LALSuite's E1); the rotor R₀ takes (x̂, ŷ, ẑ) to (n̂, λ̂ = ℓ̂ × n̂, ℓ̂).
+
+Astropy is imported only here (and lazily), never in the numba code.
+"""
+
+import math
+
+import numpy as np
+
+
+def _gm_sun_over_c3():
+    from astropy import constants as const
+    return float((const.GM_sun / const.c ** 3).si.value)
+
+
+MTSUN_SI = _gm_sun_over_c3()
+"""G M☉ / c³ in seconds."""
+
+
+def solar_masses(m, name="mass"):
+    """A mass in M☉ from a float (already M☉) or an astropy Quantity; must be finite and > 0."""
+    try:
+        from astropy import units as u
+        if isinstance(m, u.Quantity):
+            m = m.to_value(u.M_sun)
+    except ImportError:  # pragma: no cover - astropy is a dependency
+        pass
+    m = float(m)
+    if not math.isfinite(m) or m <= 0.0:
+        raise ValueError(f"{name} must be a finite positive mass, got {m!r}")
+    return m
+
+
+def hertz(f, name="frequency", allow_none=False):
+    """A frequency in Hz from a float or an astropy Quantity; must be finite and > 0."""
+    if f is None:
+        if allow_none:
+            return None
+        raise ValueError(f"{name} is required")
+    try:
+        from astropy import units as u
+        if isinstance(f, u.Quantity):
+            f = f.to_value(u.Hz)
+    except ImportError:  # pragma: no cover
+        pass
+    f = float(f)
+    if not math.isfinite(f) or f <= 0.0:
+        raise ValueError(f"{name} must be a finite positive frequency in Hz, got {f!r}")
+    return f
+
+
+def seconds(dt, name="time step"):
+    """A time in seconds from a float or an astropy Quantity; must be finite and > 0."""
+    try:
+        from astropy import units as u
+        if isinstance(dt, u.Quantity):
+            dt = dt.to_value(u.s)
+    except ImportError:  # pragma: no cover
+        pass
+    dt = float(dt)
+    if not math.isfinite(dt) or dt <= 0.0:
+        raise ValueError(f"{name} must be a finite positive time in seconds, got {dt!r}")
+    return dt
+
+
+def total_mass_seconds(m1, m2):
+    """G(m₁ + m₂)/c³ in seconds, masses in M☉."""
+    return (m1 + m2) * MTSUN_SI
+
+
+def v_from_frequency(f_gw, M_sec):
+    """v = (π M f_GW)^{1/3} (f_GW = 2 f_orb)."""
+    return (math.pi * M_sec * f_gw) ** (1.0 / 3.0)
+
+
+def frequency_from_v(v, M_sec):
+    """f_GW = v³/(π M)."""
+    return np.asarray(v) ** 3 / (math.pi * M_sec)
+
+
+def newtonian_time_to_coalescence(v, nu):
+    """τ(v) = 5/(256 ν v⁸) in units of M: the leading-order time from v to coalescence."""
+    return 5.0 / (256.0 * nu * v ** 8)
+
+
+def spin_vector(chi, name):
+    """A dimensionless spin 3-vector, finite with |χ| ≤ 1."""
+    c = np.asarray(chi, dtype=np.float64)
+    if c.shape != (3,):
+        raise ValueError(f"{name} must be a 3-vector, got shape {c.shape}")
+    if not np.all(np.isfinite(c)):
+        raise ValueError(f"{name} must be finite, got {c}")
+    if np.dot(c, c) > 1.0 + 1e-14:
+        raise ValueError(f"|{name}| = {np.linalg.norm(c)!r} exceeds 1")
+    return c.copy()
+
+
+def orthonormal_frame(ell_hat, n_hat, tol=1e-8):
+    """(ℓ̂, n̂) checked to be unit and orthogonal within ``tol`` and then made exactly so."""
+    ell = np.asarray(ell_hat, dtype=np.float64)
+    n = np.asarray(n_hat, dtype=np.float64)
+    for name, a in (("ell_hat", ell), ("n_hat", n)):
+        if a.shape != (3,) or not np.all(np.isfinite(a)):
+            raise ValueError(f"{name} must be a finite 3-vector, got {a!r}")
+        if abs(np.linalg.norm(a) - 1.0) > tol:
+            raise ValueError(f"{name} must be a unit vector (|{name}| = {np.linalg.norm(a)!r})")
+    if abs(np.dot(ell, n)) > tol:
+        raise ValueError(f"n_hat must be orthogonal to ell_hat (n̂·ℓ̂ = {np.dot(ell, n)!r})")
+    ell = ell / np.linalg.norm(ell)
+    n = n - np.dot(n, ell) * ell
+    n = n / np.linalg.norm(n)
+    return ell, n
+
+
+def frame_rotor(ell, n):
+    """Unit rotor R₀ with R₀ x̂ R₀⁻¹ = n̂, R₀ ẑ R₀⁻¹ = ℓ̂ (and ŷ → λ̂ = ℓ̂ × n̂)."""
+    from ..quaternion import qfrom_matrix
+    lam = np.cross(ell, n)
+    M = np.column_stack((n, lam, ell))
+    return np.asarray(qfrom_matrix(np.ascontiguousarray(M)))

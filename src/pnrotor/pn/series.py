@@ -1,0 +1,219 @@
+r"""Truncated post-Newtonian series with spin-dependent coefficients.
+
+This module owns the representation shared by :mod:`pnrotor.pn.energy`, :mod:`pnrotor.pn.flux` and the
+right-hand sides in :mod:`pnrotor.pn.system`:
+
+* a PN series is an array ``C[k, b, l]`` of shape ``(NK, NB, NL)`` meaning
+
+      Σ_k v^k Σ_b B_b (C[k, b, 0] + C[k, b, 1] ln v),
+
+  a relative expansion in v (k = 0 … 9, i.e. through 4.5PN) whose coefficients are linear combinations
+  of the spin invariants ``B`` below and may carry one power of ln v;
+* products of such series (with spin products reduced to the invariant basis), the truncated series
+  ratio used by TaylorT4/T5, and truncation by PN order *separately* for each power of the spins;
+* the numba evaluator :func:`eval_series` used inside the right-hand sides.
+
+Spin-invariant basis (χᵢ the dimensionless spins, ℓ̂ the orbital angular momentum direction)::
+
+    b:  0    1        2        3        4              5        6          7        8
+        1    ℓ̂·χ₁     ℓ̂·χ₂     χ₁·χ₂    (ℓ̂·χ₁)(ℓ̂·χ₂)   χ₁·χ₁    (ℓ̂·χ₁)²    χ₂·χ₂    (ℓ̂·χ₂)²
+
+Index 0 is spin-independent, 1–2 are linear in spin (spin-orbit), 3–8 quadratic (spin-spin,
+self-spin and quadrupole-monopole, orbit averaged so that only these scalars occur).  Products of two
+linear invariants map onto 4, 6, 8; anything of total spin power ≥ 3 is dropped, because the
+cubic-in-spin terms of the energy and flux (Marsat 2015, arXiv:1411.4118) are not implemented and
+keeping only their product pieces would be inconsistent.
+
+Truncation rule: a term v^k B_b is kept iff ``k <= kmax[power(b)]`` where ``kmax = 2 × order`` for
+the nonspinning (power 0), spin-orbit (power 1) and spin-spin (power 2) orders chosen by the user;
+an order < 0 removes that spin power entirely.  Applying the rule to the inputs *and* to the result
+of a product or ratio is the same as truncating the exact series, because every product raises both
+k and the spin power.
+
+The logarithm ln v is treated as an O(1) number (its coefficient is part of the v^k coefficient), the
+convention of LALSuite's TaylorT4 and of PostNewtonian.jl's ``truncated_series_ratio``.  Products of
+two logarithms first occur at v¹² and are outside this representation (checked).
+"""
+
+import numpy as np
+from numba import njit
+
+NK = 10  # powers v^0 … v^9 (through 4.5PN)
+NB = 9   # spin-invariant basis, see module docstring
+NL = 2   # powers of ln v: 0 and 1
+
+B_ONE, B_A1, B_A2, B_S12, B_A1A2, B_S11, B_A1A1, B_S22, B_A2A2 = range(NB)
+BASIS_NAMES = ("1", "l.chi1", "l.chi2", "chi1.chi2", "(l.chi1)(l.chi2)", "chi1.chi1", "(l.chi1)^2",
+               "chi2.chi2", "(l.chi2)^2")
+SPIN_POWER = np.array([0, 1, 1, 2, 2, 2, 2, 2, 2], dtype=np.int64)
+
+# PROD[b1, b2] = basis index of B_b1 · B_b2, or -1 if the product has spin power > 2 (dropped)
+PROD = -np.ones((NB, NB), dtype=np.int64)
+for _b in range(NB):
+    PROD[0, _b] = _b
+    PROD[_b, 0] = _b
+PROD[B_A1, B_A1] = B_A1A1
+PROD[B_A1, B_A2] = B_A1A2
+PROD[B_A2, B_A1] = B_A1A2
+PROD[B_A2, B_A2] = B_A2A2
+del _b
+
+MAX_ORDER = (NK - 1) / 2.0  # 4.5PN
+
+
+def new_series():
+    """A zero series C[k, b, l]."""
+    return np.zeros((NK, NB, NL))
+
+
+def kmax_from_orders(pn_order, so_order, ss_order):
+    """Largest kept power of v for spin power 0, 1, 2 (−1: nothing of that spin power)."""
+    out = np.empty(3, dtype=np.int64)
+    for j, order in enumerate((pn_order, so_order, ss_order)):
+        if order is None or order < 0:
+            out[j] = -1
+        else:
+            twice = 2.0 * float(order)
+            if abs(twice - round(twice)) > 1e-12:
+                raise ValueError(f"PN orders must be multiples of 0.5, got {order!r}")
+            out[j] = min(int(round(twice)), NK - 1)
+    return out
+
+
+@njit(cache=True)
+def truncate(C, kmax):
+    """Zero every term v^k B_b with k > kmax[SPIN_POWER[b]] (in place) and return C."""
+    for k in range(C.shape[0]):
+        for b in range(C.shape[1]):
+            if k > kmax[SPIN_POWER[b]]:
+                for l in range(C.shape[2]):
+                    C[k, b, l] = 0.0
+    return C
+
+
+@njit(cache=True)
+def _accumulate_product(out, A, B, ka, kb, sign):
+    """out[ka+kb] += sign · A[ka] ⊗ B[kb] (spin products reduced with PROD, ln-powers added)."""
+    k = ka + kb
+    for b1 in range(NB):
+        for l1 in range(NL):
+            a = A[ka, b1, l1]
+            if a == 0.0:
+                continue
+            for b2 in range(NB):
+                b3 = PROD[b1, b2]
+                if b3 < 0:
+                    continue
+                for l2 in range(NL):
+                    c = B[kb, b2, l2]
+                    if c == 0.0:
+                        continue
+                    if l1 + l2 >= NL:
+                        raise ValueError("series product produced ln(v)^2 inside the kept orders")
+                    out[k, b3, l1 + l2] += sign * a * c
+
+
+@njit(cache=True)
+def multiply(A, B, kmax):
+    """Truncated product A·B."""
+    out = np.zeros((NK, NB, NL))
+    for ka in range(NK):
+        for kb in range(NK - ka):
+            _accumulate_product(out, A, B, ka, kb, 1.0)
+    return truncate(out, kmax)
+
+
+@njit(cache=True)
+def divide(N, D, kmax):
+    """Truncated series ratio Q = N / D (the TaylorT4/T5 re-expansion).
+
+    D must start with a pure number: D[0] = d₀ · B_0 with d₀ ≠ 0 and no logarithm.  Then
+    Q_k = (N_k − Σ_{i=1..k} D_i Q_{k−i}) / d₀, order by order.
+    """
+    d0 = D[0, 0, 0]
+    for b in range(NB):
+        for l in range(NL):
+            if (b != 0 or l != 0) and D[0, b, l] != 0.0:
+                raise ValueError("divide: the leading coefficient of the denominator must be a pure number")
+    if d0 == 0.0:
+        raise ValueError("divide: the denominator has a vanishing leading coefficient")
+    Q = np.zeros((NK, NB, NL))
+    for k in range(NK):
+        for b in range(NB):
+            for l in range(NL):
+                Q[k, b, l] = N[k, b, l]
+        for i in range(1, k + 1):
+            _accumulate_product(Q, D, Q, i, k - i, -1.0)
+        for b in range(NB):
+            for l in range(NL):
+                Q[k, b, l] /= d0
+        # truncating as we go keeps dropped terms out of the higher orders
+        for b in range(NB):
+            if k > kmax[SPIN_POWER[b]]:
+                for l in range(NL):
+                    Q[k, b, l] = 0.0
+    return Q
+
+
+def fold_basis(C, basis_values):
+    """Contract the spin basis with fixed invariant values: returns C' with only b = 0 nonzero.
+
+    Used for aligned-spin and nonspinning runs, where the invariants are constants of the motion.
+    """
+    out = new_series()
+    out[:, 0, :] = np.einsum("kbl,b->kl", C, np.asarray(basis_values, dtype=np.float64))
+    return out
+
+
+def basis_values(a1, a2, s12, s11, s22):
+    """The nine invariants from ℓ̂·χ₁, ℓ̂·χ₂, χ₁·χ₂, χ₁·χ₁, χ₂·χ₂."""
+    return np.array([1.0, a1, a2, s12, a1 * a2, s11, a1 * a1, s22, a2 * a2])
+
+
+def evaluate(C, v, basis):
+    """Evaluate a series at v (numpy reference, vectorized over v) with fixed basis values."""
+    v = np.asarray(v, dtype=np.float64)
+    lnv = np.log(v)
+    coef = np.einsum("kbl,b->kl", C, np.asarray(basis, dtype=np.float64))
+    out = np.zeros_like(v)
+    for k in range(NK - 1, -1, -1):
+        out = out * v + coef[k, 0] + coef[k, 1] * lnv
+    return out
+
+
+def last_nonzero_power(C):
+    """1 + the largest k with a nonzero coefficient (number of Horner terms needed); 0 if C == 0."""
+    nz = np.nonzero(np.any(C != 0.0, axis=(1, 2)))[0]
+    return int(nz[-1]) + 1 if nz.size else 0
+
+
+@njit(cache=True, inline="always")
+def eval_series(p, off, nk, v, lnv, b1, b2, b3, b4, b5, b6, b7, b8):
+    """Σ_{k<nk} v^k Σ_b B_b (C[k,b,0] + C[k,b,1] ln v) for C stored flat at p[off:] (Horner in v).
+
+    B_0 = 1 and b1…b8 are the other eight invariants of the basis (module docstring).
+    """
+    acc = 0.0
+    for k in range(nk - 1, -1, -1):
+        o = off + k * (NB * NL)
+        ck = ((p[o] + p[o + 1] * lnv)
+              + b1 * (p[o + 2] + p[o + 3] * lnv)
+              + b2 * (p[o + 4] + p[o + 5] * lnv)
+              + b3 * (p[o + 6] + p[o + 7] * lnv)
+              + b4 * (p[o + 8] + p[o + 9] * lnv)
+              + b5 * (p[o + 10] + p[o + 11] * lnv)
+              + b6 * (p[o + 12] + p[o + 13] * lnv)
+              + b7 * (p[o + 14] + p[o + 15] * lnv)
+              + b8 * (p[o + 16] + p[o + 17] * lnv))
+        acc = acc * v + ck
+    return acc
+
+
+@njit(cache=True, inline="always")
+def eval_series0(p, off, nk, v, lnv):
+    """Like :func:`eval_series` for a series with only the spin-independent column b = 0."""
+    acc = 0.0
+    for k in range(nk - 1, -1, -1):
+        o = off + k * (NB * NL)
+        acc = acc * v + (p[o] + p[o + 1] * lnv)
+    return acc

@@ -1,0 +1,345 @@
+r"""State layout, parameter vector and numba right-hand sides of the post-Newtonian system.
+
+Two specializations, each a top-level ``@njit(RHS_SIG, cache=True)`` function, so the DOP853 driver
+(which takes first-class functions of that signature) is compiled once per machine and cached:
+
+* :func:`rhs_precessing` — state ``y = [v, χ₁(3), χ₂(3), R(4), Φ]`` (12 components);
+* :func:`rhs_aligned` — nonspinning and aligned spins, ``y = [v, Φ]``: ℓ̂ and the spins are constant,
+  the spin equations and the precession are not integrated at all, and the frame is reconstructed
+  exactly as R(t) = R₀ exp(Φ ẑ/2).
+
+Approximant (TaylorT1/T4/T5), PN orders and spin content are *data*: the parameter vector ``p``
+holds the series coefficients with every truncated term zeroed (see :mod:`pnrotor.pn.series`), so
+one compiled function serves every approximant and order.
+
+Equations (units G = c = M = 1, t in units of M)
+-------------------------------------------------
+* Energy balance: v̇ = −F/E′ = (32ν/5) v⁹ N(v)/D(v), with E = −(νv²/2)Ê and F = (32/5)ν²v¹⁰F̂
+  (:mod:`~pnrotor.pn.energy`, :mod:`~pnrotor.pn.flux`), and
+
+      TaylorT1: N = F̂, D = Ê′ evaluated as they are;
+      TaylorT4: N = [F̂/Ê′] re-expanded and truncated, D = 1;
+      TaylorT5: N = 1, D = [Ê′/F̂] re-expanded and truncated (the inverse, Ajith 2011, arXiv:1107.1267).
+
+* Spins: χ̇ᵢ = Ωᵢ × χᵢ (:mod:`~pnrotor.pn.precession`).
+* Frame: dR/dt = ½ Ω R with ℓ̂ = R ẑ R⁻¹, n̂ = R x̂ R⁻¹ (Boyle 2016, arXiv:1604.08139,
+  eq:integrate-spinor; R unnormalized, its norm cancels in R v R⁻¹).  The orbital frame rotates with
+  Ω = Φ̇ ℓ̂ + Ω_ℓ, Ω_ℓ = −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| the orbit-averaged precession of the orbital plane.
+  Two equivalent ways of integrating it, selected by ``p[P_ROTOR]``:
+
+      0 "coprecessing": the state holds R_p with dR_p/dt = ½ Ω_ℓ R_p, and R = R_p exp(Φ ẑ/2).
+        Exact, because d/dt[R_p e^{Φẑ/2}] = ½Ω_ℓ R + ½Φ̇ R_p ẑ R_p⁻¹ R = ½(Ω_ℓ + Φ̇ ℓ̂) R and
+        R_p ẑ R_p⁻¹ = R ẑ R⁻¹ = ℓ̂.  R_p varies on the precession time scale, so the integrator is
+        not forced to resolve every orbit.
+      1 "orbital": the state holds R itself, dR/dt = ½(Φ̇ ℓ̂ + Ω_ℓ) R, the orbital motion included
+        (the paper's equation as written; needs steps that resolve the orbit).
+
+* Phase: Φ̇ = v³ − |Ω_ℓ,LO|²/(4v³) (the shift only if ``p[P_SHIFT]`` = 1; arXiv:1507.00406).
+
+Events (all terminal), filled by :func:`events_precessing` / :func:`events_aligned`:
+  0: v − v_end (requested end frequency, or v_max);   1: Ê′ (E′ = −νvÊ′ ≥ 0 ⇔ Ê′ ≤ 0);
+  2: N·D (sign of v̇);   3, 4: (1 + SPIN_TOL) − |χᵢ|².
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..ode import EVENTS_SIG, RHS_SIG
+from .series import NB, NK, NL, eval_series, eval_series0
+
+# ---------------------------------------------------------------------------------------------------
+# state layout
+# ---------------------------------------------------------------------------------------------------
+Y_V = 0
+Y_CHI1 = 1      # 1, 2, 3
+Y_CHI2 = 4      # 4, 5, 6
+Y_R = 7         # 7, 8, 9, 10  (w, x, y, z)
+Y_PHI = 11
+N_PRECESSING = 12
+# aligned state
+YA_V = 0
+YA_PHI = 1
+N_ALIGNED = 2
+
+N_EVENTS = 5
+EV_V_END, EV_ENERGY, EV_VDOT, EV_SPIN1, EV_SPIN2 = range(N_EVENTS)
+
+# ---------------------------------------------------------------------------------------------------
+# parameter vector layout
+# ---------------------------------------------------------------------------------------------------
+P_X1 = 0
+P_X2 = 1
+P_NU = 2
+P_VDOT0 = 3      # 32ν/5
+P_VEND = 4       # v at which event 0 fires
+P_ROTOR = 5      # 0 coprecessing, 1 orbital
+P_SHIFT = 6      # 1: apply the precession phase shift
+P_W1 = 7         # phase-shift weights w₁, w₂
+P_W2 = 8
+P_SO1 = 9        # σ₀, σ₂, σ₄ of body 1 (zeroed when truncated)
+P_SO2 = 12       # σ₀, σ₂, σ₄ of body 2
+P_SS2_1 = 15     # 2PN spin-spin: c_j, c_j⊥, c_i⊥ for body 1
+P_SS2_2 = 18     # ... body 2
+P_SS3_1 = 21     # 3PN spin-spin: c_j, c_j⊥, c_i⊥ for body 1
+P_SS3_2 = 24     # ... body 2
+P_L2 = 27        # |L| = (ν/v)(1 + L₂v² + L₄v⁴)
+P_L4 = 28
+P_NUM_LEN = 29   # number of powers of v to evaluate in N, D, Ê′
+P_DEN_LEN = 30
+P_EP_LEN = 31
+P_SPINTOL = 32   # |χ|² may exceed 1 by this much before event 3/4 fires
+P_SERIES = 40
+SERIES_SIZE = NK * NB * NL
+P_NUM = P_SERIES
+P_DEN = P_NUM + SERIES_SIZE
+P_EP = P_DEN + SERIES_SIZE
+P_SIZE = P_EP + SERIES_SIZE
+
+SPIN_TOL = 1e-10
+
+
+# ---------------------------------------------------------------------------------------------------
+# numba kernels
+# ---------------------------------------------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def _ell_hat(w, x, y, z):
+    """ℓ̂ = R ẑ R⁻¹ for the (possibly unnormalized) rotor R = (w, x, y, z): third column of the
+    rotation matrix of R, the same convention as :func:`pnrotor.quaternion.qrotate`."""
+    m = w * w + x * x + y * y + z * z
+    c = 2.0 / m
+    return c * (x * z + w * y), c * (y * z - w * x), (w * w - x * x - y * y + z * z) / m
+
+
+@njit(cache=True, inline="always")
+def _vdot_parts(p, v, lnv, b1, b2, b3, b4, b5, b6, b7, b8):
+    num = eval_series(p, P_NUM, int(p[P_NUM_LEN]), v, lnv, b1, b2, b3, b4, b5, b6, b7, b8)
+    den = eval_series(p, P_DEN, int(p[P_DEN_LEN]), v, lnv, b1, b2, b3, b4, b5, b6, b7, b8)
+    return num, den
+
+
+@njit(RHS_SIG, cache=True)
+def rhs_precessing(t, y, p, dydt):
+    """Right-hand side for the precessing state [v, χ₁, χ₂, R, Φ] (see module docstring)."""
+    v = y[Y_V]
+    c1x, c1y, c1z = y[1], y[2], y[3]
+    c2x, c2y, c2z = y[4], y[5], y[6]
+    rw, rx, ry, rz = y[7], y[8], y[9], y[10]
+    lx, ly, lz = _ell_hat(rw, rx, ry, rz)
+
+    X1 = p[P_X1]
+    X2 = p[P_X2]
+    # spin invariants (basis of pnrotor.pn.series)
+    a1 = lx * c1x + ly * c1y + lz * c1z
+    a2 = lx * c2x + ly * c2y + lz * c2z
+    s12 = c1x * c2x + c1y * c2y + c1z * c2z
+    s11 = c1x * c1x + c1y * c1y + c1z * c1z
+    s22 = c2x * c2x + c2y * c2y + c2z * c2z
+
+    lnv = math.log(v)
+    num, den = _vdot_parts(p, v, lnv, a1, a2, s12, a1 * a2, s11, a1 * a1, s22, a2 * a2)
+    v2 = v * v
+    v3 = v2 * v
+    v5 = v3 * v2
+    v6 = v3 * v3
+    v8 = v6 * v2
+    vdot = p[P_VDOT0] * v6 * v3 * num / den
+
+    # in-plane parts χᵢ⊥ = χᵢ − (ℓ̂·χᵢ) ℓ̂
+    p1x, p1y, p1z = c1x - a1 * lx, c1y - a1 * ly, c1z - a1 * lz
+    p2x, p2y, p2z = c2x - a2 * lx, c2y - a2 * ly, c2z - a2 * lz
+
+    # Ω₁ = v⁵(σ₀+σ₂v²+σ₄v⁴) ℓ̂ + v⁶[c_j χ₂ + c_j⊥ χ₂⊥ + c_i⊥ χ₁⊥] + v⁸[...]   (precession.py)
+    so1 = v5 * (p[P_SO1] + v2 * (p[P_SO1 + 1] + v2 * p[P_SO1 + 2]))
+    kj1 = v6 * p[P_SS2_1] + v8 * p[P_SS3_1]
+    kjp1 = v6 * p[P_SS2_1 + 1] + v8 * p[P_SS3_1 + 1]
+    kip1 = v6 * p[P_SS2_1 + 2] + v8 * p[P_SS3_1 + 2]
+    o1x = so1 * lx + kj1 * c2x + kjp1 * p2x + kip1 * p1x
+    o1y = so1 * ly + kj1 * c2y + kjp1 * p2y + kip1 * p1y
+    o1z = so1 * lz + kj1 * c2z + kjp1 * p2z + kip1 * p1z
+    so2 = v5 * (p[P_SO2] + v2 * (p[P_SO2 + 1] + v2 * p[P_SO2 + 2]))
+    kj2 = v6 * p[P_SS2_2] + v8 * p[P_SS3_2]
+    kjp2 = v6 * p[P_SS2_2 + 1] + v8 * p[P_SS3_2 + 1]
+    kip2 = v6 * p[P_SS2_2 + 2] + v8 * p[P_SS3_2 + 2]
+    o2x = so2 * lx + kj2 * c1x + kjp2 * p1x + kip2 * p2x
+    o2y = so2 * ly + kj2 * c1y + kjp2 * p1y + kip2 * p2y
+    o2z = so2 * lz + kj2 * c1z + kjp2 * p1z + kip2 * p2z
+
+    # χ̇ᵢ = Ωᵢ × χᵢ
+    d1x = o1y * c1z - o1z * c1y
+    d1y = o1z * c1x - o1x * c1z
+    d1z = o1x * c1y - o1y * c1x
+    d2x = o2y * c2z - o2z * c2y
+    d2y = o2z * c2x - o2x * c2z
+    d2z = o2x * c2y - o2y * c2x
+
+    # Ω_ℓ = −ℓ̂ × (X₁²χ̇₁ + X₂²χ̇₂) / |L|,  |L| = (ν/v)(1 + L₂v² + L₄v⁴)
+    q1 = X1 * X1
+    q2 = X2 * X2
+    sx = q1 * d1x + q2 * d2x
+    sy = q1 * d1y + q2 * d2y
+    sz = q1 * d1z + q2 * d2z
+    inv_L = v / (p[P_NU] * (1.0 + v2 * (p[P_L2] + v2 * p[P_L4])))
+    wx = -(ly * sz - lz * sy) * inv_L
+    wy = -(lz * sx - lx * sz) * inv_L
+    wz = -(lx * sy - ly * sx) * inv_L
+
+    # Φ̇ = v³ − |Σ wᵢ χᵢ⊥|² v⁹ / 4   (only if P_SHIFT)
+    phidot = v3
+    if p[P_SHIFT] != 0.0:
+        ux = p[P_W1] * p1x + p[P_W2] * p2x
+        uy = p[P_W1] * p1y + p[P_W2] * p2y
+        uz = p[P_W1] * p1z + p[P_W2] * p2z
+        phidot -= 0.25 * (ux * ux + uy * uy + uz * uz) * v6 * v3
+
+    # frame angular velocity: Ω_ℓ (coprecessing) or Φ̇ ℓ̂ + Ω_ℓ (orbital)
+    if p[P_ROTOR] != 0.0:
+        wx += phidot * lx
+        wy += phidot * ly
+        wz += phidot * lz
+
+    # dR/dt = ½ (0, Ω) R   (Hamilton product of the pure quaternion Ω with R)
+    dydt[Y_R] = 0.5 * (-wx * rx - wy * ry - wz * rz)
+    dydt[Y_R + 1] = 0.5 * (wx * rw + wy * rz - wz * ry)
+    dydt[Y_R + 2] = 0.5 * (-wx * rz + wy * rw + wz * rx)
+    dydt[Y_R + 3] = 0.5 * (wx * ry - wy * rx + wz * rw)
+
+    dydt[Y_V] = vdot
+    dydt[1] = d1x
+    dydt[2] = d1y
+    dydt[3] = d1z
+    dydt[4] = d2x
+    dydt[5] = d2y
+    dydt[6] = d2z
+    dydt[Y_PHI] = phidot
+
+
+@njit(EVENTS_SIG, cache=True)
+def events_precessing(t, y, p, g):
+    """Event functions for the precessing state (module docstring)."""
+    v = y[Y_V]
+    c1x, c1y, c1z = y[1], y[2], y[3]
+    c2x, c2y, c2z = y[4], y[5], y[6]
+    lx, ly, lz = _ell_hat(y[7], y[8], y[9], y[10])
+    a1 = lx * c1x + ly * c1y + lz * c1z
+    a2 = lx * c2x + ly * c2y + lz * c2z
+    s12 = c1x * c2x + c1y * c2y + c1z * c2z
+    s11 = c1x * c1x + c1y * c1y + c1z * c1z
+    s22 = c2x * c2x + c2y * c2y + c2z * c2z
+    lnv = math.log(v) if v > 0.0 else -np.inf
+    num, den = _vdot_parts(p, v, lnv, a1, a2, s12, a1 * a2, s11, a1 * a1, s22, a2 * a2)
+    g[EV_V_END] = v - p[P_VEND]
+    g[EV_ENERGY] = eval_series(p, P_EP, int(p[P_EP_LEN]), v, lnv, a1, a2, s12, a1 * a2, s11, a1 * a1,
+                               s22, a2 * a2)
+    g[EV_VDOT] = num * den
+    g[EV_SPIN1] = 1.0 + p[P_SPINTOL] - s11
+    g[EV_SPIN2] = 1.0 + p[P_SPINTOL] - s22
+
+
+@njit(RHS_SIG, cache=True)
+def rhs_aligned(t, y, p, dydt):
+    """Right-hand side for nonspinning / aligned-spin runs, y = [v, Φ]; the spin invariants are folded
+    into the b = 0 column of the series at setup (:func:`pnrotor.pn.series.fold_basis`)."""
+    v = y[YA_V]
+    lnv = math.log(v)
+    num = eval_series0(p, P_NUM, int(p[P_NUM_LEN]), v, lnv)
+    den = eval_series0(p, P_DEN, int(p[P_DEN_LEN]), v, lnv)
+    v3 = v * v * v
+    dydt[YA_V] = p[P_VDOT0] * v3 * v3 * v3 * num / den
+    dydt[YA_PHI] = v3
+
+
+@njit(EVENTS_SIG, cache=True)
+def events_aligned(t, y, p, g):
+    """Event functions for the aligned state (events 3, 4 never fire: the spins are constant)."""
+    v = y[YA_V]
+    lnv = math.log(v) if v > 0.0 else -np.inf
+    num = eval_series0(p, P_NUM, int(p[P_NUM_LEN]), v, lnv)
+    den = eval_series0(p, P_DEN, int(p[P_DEN_LEN]), v, lnv)
+    g[EV_V_END] = v - p[P_VEND]
+    g[EV_ENERGY] = eval_series0(p, P_EP, int(p[P_EP_LEN]), v, lnv)
+    g[EV_VDOT] = num * den
+    g[EV_SPIN1] = 1.0
+    g[EV_SPIN2] = 1.0
+
+
+# ---------------------------------------------------------------------------------------------------
+# parameter vector
+# ---------------------------------------------------------------------------------------------------
+
+APPROXIMANTS = ("T1", "T4", "T5")
+
+
+def vdot_series(X1, approximant, kmax, kappa1=1.0, kappa2=1.0):
+    """(N, D, Ê′) series of v̇ = (32ν/5) v⁹ N/D for the approximant, truncated by ``kmax``."""
+    from .energy import energy_derivative_series, energy_series
+    from .flux import flux_series
+    from .series import divide, new_series, truncate
+
+    E = truncate(energy_series(X1, kappa1, kappa2), kmax)
+    Ep = truncate(energy_derivative_series(E), kmax)
+    F = truncate(flux_series(X1, kappa1, kappa2), kmax)
+    one = new_series()
+    one[0, 0, 0] = 1.0
+    if approximant == "T1":
+        return F, Ep, Ep
+    if approximant == "T4":
+        return divide(F, Ep, kmax), one, Ep
+    if approximant == "T5":
+        return one, divide(Ep, F, kmax), Ep
+    raise ValueError(f"approximant must be one of {APPROXIMANTS}, got {approximant!r}")
+
+
+def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
+                    rotor="coprecessing", phase_shift=False, aligned_basis=None):
+    """Build the parameter vector p.
+
+    ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
+    invariants for the aligned/nonspinning right-hand side (folded into the series), or None for the
+    precessing one.
+    """
+    from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms,
+                             spin_orbit_precession, spin_spin_precession_2pn, spin_spin_precession_3pn)
+    from .series import fold_basis, last_nonzero_power
+
+    X2 = 1.0 - X1
+    nu = X1 * X2
+    p = np.zeros(P_SIZE)
+    p[P_X1] = X1
+    p[P_X2] = X2
+    p[P_NU] = nu
+    p[P_VDOT0] = 32.0 * nu / 5.0
+    p[P_VEND] = v_end
+    if rotor not in ("coprecessing", "orbital"):
+        raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
+    p[P_ROTOR] = 1.0 if rotor == "orbital" else 0.0
+    p[P_SHIFT] = 1.0 if phase_shift else 0.0
+    p[P_W1], p[P_W2] = phase_shift_weights(X1, X2)
+    inc = precession_terms(so_order, ss_order)
+    for off, (Xi, Xj, ki) in ((P_SO1, (X1, X2, kappa1)), (P_SO2, (X2, X1, kappa2))):
+        s0, s2, s4 = spin_orbit_precession(Xi, Xj)
+        p[off] = s0 if inc["so_lo"] else 0.0
+        p[off + 1] = s2 if inc["so_nlo"] else 0.0
+        p[off + 2] = s4 if inc["so_nnlo"] else 0.0
+    for off2, off3, (Xi, Xj, ki) in ((P_SS2_1, P_SS3_1, (X1, X2, kappa1)), (P_SS2_2, P_SS3_2, (X2, X1, kappa2))):
+        if inc["ss_2pn"]:
+            p[off2:off2 + 3] = spin_spin_precession_2pn(Xi, Xj, ki)
+        if inc["ss_3pn"]:
+            p[off3:off3 + 3] = spin_spin_precession_3pn(Xi, Xj, ki)
+    L2, L4 = angular_momentum_coefficients(nu)
+    p[P_L2] = L2 if inc["so_nlo"] else 0.0
+    p[P_L4] = L4 if inc["so_nnlo"] else 0.0
+    p[P_SPINTOL] = SPIN_TOL
+
+    N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2)
+    if aligned_basis is not None:
+        N, D, Ep = (fold_basis(S, aligned_basis) for S in (N, D, Ep))
+    p[P_NUM:P_NUM + SERIES_SIZE] = N.ravel()
+    p[P_DEN:P_DEN + SERIES_SIZE] = D.ravel()
+    p[P_EP:P_EP + SERIES_SIZE] = Ep.ravel()
+    p[P_NUM_LEN] = last_nonzero_power(N)
+    p[P_DEN_LEN] = last_nonzero_power(D)
+    p[P_EP_LEN] = last_nonzero_power(Ep)
+    return p
