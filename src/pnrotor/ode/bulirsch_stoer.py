@@ -56,7 +56,7 @@ _ORDER_DOWN = 0.8  # ODEX fac3
 _ORDER_UP = 0.9    # ODEX fac4
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={'contract'})
 def _gragg(rhs, t, y, f0, h_step, nsub, p, za, zb, ftmp):
     """Gragg's modified midpoint rule with nsub substeps over h_step; returns the buffer holding z_n."""
     n = y.size

@@ -32,6 +32,10 @@ Hairer's published DOP853 Fortran code; coefficients in :mod:`pnrotor.ode.tablea
   direction) are located on the dense interpolant with Brent's method (R. P. Brent, *Algorithms
   for Minimization without Derivatives*, 1973, ch. 4) to a few ulp of t; all events are terminal.
 
+Floating point: the stage and interpolation sums are compiled with ``fastmath={'contract'}``, i.e.
+LLVM may fuse a·b + c into one FMA instruction (halves the arithmetic of a step; results then differ
+from an unfused evaluation by rounding only).  No other fast-math flag is used.
+
 Function types: the core takes the right-hand side and hooks as first-class
 ``numba.types.FunctionType`` values with the explicit signatures below; numba caches such a driver
 across processes (a driver taking a dispatcher or closure is recompiled in every process).  Each
@@ -274,7 +278,7 @@ def select_initial_step(rhs, t0, y0, f0, p, t_end, max_step, order, atol, rtol, 
     return min(100.0 * h0, h1, interval, max_step)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={'contract'})
 def _dop853_step(rhs, t, y, h, p, K, ys, ynew, atol, rtol):
     """One DOP853 step from (t, y) with step h; K[0] must hold f(t, y).
 
@@ -359,7 +363,7 @@ def _dop853_step(rhs, t, y, h, p, K, ys, ynew, atol, rtol):
     return abs(h) * err5 / math.sqrt(n * deno)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={'contract'})
 def _dense_coefficients(rhs, t, y, ynew, h, p, K, ys, rc):
     """Three extra stages K[13..15] and the eight interpolation vectors rc (Hairer's contd8).
 

@@ -127,7 +127,7 @@ class OdeResult:
 # --------------------------------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={'contract'})
 def contd8(rc, theta, out):
     """Evaluate one step's DOP853 interpolant at θ = (t − t₀)/h into ``out``.
 
