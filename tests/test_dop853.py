@@ -615,6 +615,7 @@ Y0 = [1.0, 0.0]
     (dict(atol=1e-8, first_step=20.0), "first_step must not exceed"),
     (dict(atol=1e-8, safety=1.5), r"safety must be in \(0.0, 1.0\]"),
     (dict(atol=1e-8, min_factor=0.0), "min_factor must be in"),
+    (dict(atol=1e-8, min_factor=1.0), r"min_factor must be in \(0.0, 1.0\)"),
     (dict(atol=1e-8, max_factor=0.5), "max_factor must be >= 1"),
     (dict(atol=1e-8, args=[[1.0], [2.0]]), "args must be a scalar or a 1-D sequence"),
     (dict(atol=1e-8, events=osc_events), "n_events must be >= 1"),

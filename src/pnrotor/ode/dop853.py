@@ -963,8 +963,10 @@ def dop853(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None, max_ste
     event_direction : None, int or array_like (m,)
         Per event: +1 only increasing crossings (− → +), −1 only decreasing, 0 both (default).
     safety, min_factor, max_factor : float
-        Controller: h_new = h · clip(safety · err^(−1/8), min_factor, max_factor).  Defaults are
-        Hairer's DOP853 values (0.9, 1/3, 6); scipy's DOP853 uses (0.9, 0.2, 10).
+        Controller: h_new = h · clip(safety · err^(−1/8), min_factor, max_factor), with
+        0 < safety ≤ 1, 0 < min_factor < 1 ≤ max_factor.  Defaults are Hairer's DOP853 values
+        (0.9, 1/3, 6); scipy's DOP853 uses (0.9, 0.2, 10), with which the two codes take the same
+        steps (up to rounding in the error estimate).
 
     Returns
     -------
@@ -989,7 +991,7 @@ def dop853(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None, max_ste
     mode, te = _validate_t_eval(t_eval, t0, t_end)
     dense = bool(dense)
     safety = _positive_factor(safety, "safety", 0.0, 1.0)
-    min_factor = _positive_factor(min_factor, "min_factor", 0.0, 1.0)
+    min_factor = _positive_factor(min_factor, "min_factor", 0.0, 1.0, hi_open=True)  # < 1: rejections shrink h
     max_factor = _finite_scalar(max_factor, "max_factor")
     if max_factor < 1.0:
         raise ValueError(f"max_factor must be >= 1, got {max_factor!r}")
