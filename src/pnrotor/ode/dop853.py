@@ -38,8 +38,10 @@ from an unfused evaluation by rounding only).  No other fast-math flag is used.
 
 Function types: the core takes the right-hand side and hooks as first-class
 ``numba.types.FunctionType`` values with the explicit signatures below; numba caches such a driver
-across processes (a driver taking a dispatcher or closure is recompiled in every process).  Each
-indirect call costs about a nanosecond.
+across processes (a driver taking a dispatcher or closure is recompiled in every process).  An
+indirect call of a no-op right-hand side with its three array arguments measured ~6 ns here.
+Calling :func:`dop853` has a fixed cost of ~0.1 ms (argument checks and unboxing the function
+arguments), see ``benchmarks/bench_ode.py``.
 """
 
 import math
