@@ -121,6 +121,18 @@ def best_time(fn, repeat):
     return best
 
 
+def interleaved_best(fns, repeat):
+    """Best-of-``repeat`` wall time of each function, measured in interleaved rounds so that load
+    from other processes on a shared machine affects all of them alike."""
+    best = [math.inf] * len(fns)
+    for _ in range(repeat):
+        for i, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            fn()
+            best[i] = min(best[i], time.perf_counter() - t0)
+    return best
+
+
 def scipy_fun(rhs, p):
     """scipy-style f(t, y) calling the same numba right-hand side."""
     def f(t, y):
@@ -153,20 +165,19 @@ def bench_vs_scipy(name, rhs, y0, T, tol, exact, repeat):
     err_o = np.max(np.abs(r.y[-1] - ref))
     n_s = (s.nfev - 2) // 12
     # fixed cost of one call (argument checks, unboxing the three function arguments): a run of
-    # one step
+    # one step; per-step cost from the difference of two run lengths (cancels the fixed cost);
+    # bare RHS cost in the same rounds, same number of evaluations as our integration
     tiny = lambda: dop853(rhs, 0.0, y0, 1e-3 * h0, atol=tol, rtol=tol, first_step=1e-3 * h0, t_eval="final",
                           **SCIPY_CONTROLLER)
-    t_fixed = best_time(tiny, repeat)
-    # per-step cost from the difference of two run lengths (cancels the fixed cost)
     short = lambda: dop853(rhs, 0.0, y0, T / 4, atol=tol, rtol=tol, first_step=h0, t_eval="final",
                            **SCIPY_CONTROLLER)
     rs = short()
-    t_short = best_time(short, repeat)
-    # bare RHS cost, same run, same number of evaluations as our integration (minus its call cost)
     bare_chain(rhs, 10, y0, p)
-    tb = best_time(lambda: bare_chain(rhs, r.nfev, y0, p), repeat) - best_time(lambda: bare_chain(rhs, 1, y0, p), repeat)
+    t_long, t_short, t_fixed, t_bare, t_bare1 = interleaved_best(
+        [run, short, tiny, lambda: bare_chain(rhs, r.nfev, y0, p), lambda: bare_chain(rhs, 1, y0, p)], 4 * repeat)
+    tb = t_bare - t_bare1
     per_eval_bare = tb / r.nfev
-    per_step_ours = (to - t_short) / (r.nsteps - rs.nsteps)
+    per_step_ours = (t_long - t_short) / (r.nsteps - rs.nsteps)
     per_step_bare12 = 12 * per_eval_bare
     print(f"\n== {name}: DOP853 vs scipy solve_ivp(DOP853), rtol = atol = {tol:g}, "
           f"scipy controller (0.9, 0.2, 10) and scipy's initial step for both ==")
