@@ -1,3 +1,14 @@
 """pnrotor: orientation of precessing compact binaries by integrating the rotor (Boyle 2016)."""
 
 __version__ = "0.1.0"
+
+_EXPORTS = {"integrate_angular_velocity": "pnrotor.integrate", "FrameHistory": "pnrotor.history"}
+
+
+def __getattr__(name):
+    # imported on first use, so that `import pnrotor` (and the CLI's startup) does not load numba
+    if name in _EXPORTS:
+        import importlib
+
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'pnrotor' has no attribute {name!r}")
