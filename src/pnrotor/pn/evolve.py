@@ -16,7 +16,10 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 * ``'f_max'`` / ``'f_min'`` — v reached the requested end frequency;
 * ``'v_max'`` — v reached 1 (no f_max given and nothing else stopped the inspiral first);
 * ``'energy_balance'`` — E′(v) ≥ 0: the binding energy no longer decreases with v;
-* ``'vdot_nonpositive'`` — v̇ ≤ 0 (for T1 this coincides with E′ → 0; for T4 the flux ratio vanishes);
+* ``'vdot_nonpositive'`` — v̇ ≤ 0 (T4: the re-expanded flux ratio vanishes);
+* ``'vdot_divergent'`` — the denominator of v̇ (T5: the re-expanded Ê′/F̂) fell to 1e-3, just before
+  the pole where v̇ → ∞ (for T1 the denominator is Ê′ itself and this is reported as
+  ``'energy_balance'``);
 * ``'spin_magnitude'`` — |χᵢ| exceeded 1 (by more than 1e-10 in |χ|²);
 * ``'nonfinite'``, ``'max_steps'``, ``'step_underflow'`` — integrator failures;
 * ``'time_limit'`` — the generous time bound was reached (should not happen);
@@ -28,9 +31,10 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from ..ode import dop853
-from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
+from ..ode.result import (STATUS_EVENT, contd8, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
 from . import initial as _ini
 from . import system as _sys
@@ -42,6 +46,7 @@ TERMINATION_MESSAGES = {
     "v_max": "v reached v_max = 1",
     "energy_balance": "E'(v) >= 0: the PN binding energy stopped decreasing (energy balance breaks down)",
     "vdot_nonpositive": "dv/dt <= 0: the PN energy balance gives no inspiral",
+    "vdot_divergent": "dv/dt diverges: the denominator of the approximant's dv/dt reached zero",
     "spin_magnitude": "|chi_i| exceeded 1",
     "nonfinite": "the state or its derivative became non-finite",
     "max_steps": "the integrator reached its step limit",
@@ -155,49 +160,102 @@ def _parse_sampling(sampling):
     return "dt", _ini.seconds(sampling, "sampling dt")
 
 
-def _status_to_termination(res, direction):
+def _status_to_termination(res, direction, approximant):
     if res.status == STATUS_EVENT:
         idx = res.event_index
         if idx == _sys.EV_V_END:
             return direction
+        if idx == _sys.EV_POLE:
+            return "energy_balance" if approximant == "T1" else "vdot_divergent"
         return {_sys.EV_ENERGY: "energy_balance", _sys.EV_VDOT: "vdot_nonpositive",
                 _sys.EV_SPIN1: "spin_magnitude", _sys.EV_SPIN2: "spin_magnitude"}[idx]
     return {STATUS_SUCCESS: "time_limit", STATUS_MAX_STEPS: "max_steps",
             STATUS_STEP_UNDERFLOW: "step_underflow", STATUS_NONFINITE: "nonfinite"}[res.status]
 
 
-def _rotor_times_z_phase(Rp, Phi):
-    """R = R_p · exp(Φ ẑ/2) for arrays R_p (N, 4) and Φ (N,) (Hamilton product with (cos Φ/2, 0, 0, sin Φ/2))."""
-    c = np.cos(0.5 * Phi)
-    s = np.sin(0.5 * Phi)
-    w, x, y, z = Rp[:, 0], Rp[:, 1], Rp[:, 2], Rp[:, 3]
-    return np.column_stack((w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s))
+MODE_ALIGNED, MODE_COPRECESSING, MODE_ORBITAL = 0, 1, 2
 
 
-def _ell_from_R(R):
-    w, x, y, z = R.T
-    m = w * w + x * x + y * y + z * z
-    return np.column_stack((2.0 * (x * z + w * y) / m, 2.0 * (y * z - w * x) / m, (w * w - x * x - y * y + z * z) / m))
+@njit(cache=True, inline="always")
+def _store_row(i, vv, ph, w, x, yy, z, v, Phi, R, ell):
+    """Normalize R = (w, x, y, z) and store v, Φ, R and ℓ̂ = R ẑ R⁻¹ in row i."""
+    inv = 1.0 / math.sqrt(w * w + x * x + yy * yy + z * z)
+    w *= inv
+    x *= inv
+    yy *= inv
+    z *= inv
+    v[i] = vv
+    Phi[i] = ph
+    R[i, 0] = w
+    R[i, 1] = x
+    R[i, 2] = yy
+    R[i, 3] = z
+    ell[i, 0] = 2.0 * (x * z + w * yy)
+    ell[i, 1] = 2.0 * (yy * z - w * x)
+    ell[i, 2] = w * w - x * x - yy * yy + z * z
 
 
-def _states_to_history(Y, aligned, rotor, R0, chi1_0, chi2_0):
-    """(v, Φ, χ₁, χ₂, R unit, ℓ̂) from state rows Y."""
-    n = Y.shape[0]
-    if aligned:
-        v = Y[:, _sys.YA_V]
-        Phi = Y[:, _sys.YA_PHI]
-        R = _rotor_times_z_phase(np.broadcast_to(R0, (n, 4)), Phi)
-        chi1 = np.broadcast_to(chi1_0, (n, 3)).copy()
-        chi2 = np.broadcast_to(chi2_0, (n, 3)).copy()
-    else:
-        v = Y[:, _sys.Y_V]
-        Phi = Y[:, _sys.Y_PHI]
-        Rs = Y[:, _sys.Y_R:_sys.Y_R + 4]
-        R = Rs if rotor == "orbital" else _rotor_times_z_phase(Rs, Phi)
-        chi1 = Y[:, _sys.Y_CHI1:_sys.Y_CHI1 + 3].copy()
-        chi2 = Y[:, _sys.Y_CHI2:_sys.Y_CHI2 + 3].copy()
-    R = R / np.sqrt(np.sum(R * R, axis=1))[:, None]
-    return v.copy(), Phi.copy(), chi1, chi2, R, _ell_from_R(R)
+@njit(cache=True)
+def _fill_history(mode, seg_t, seg_h, coef, tq, Y, R0, c1, c2, offset, v, Phi, chi1, chi2, R, ell):
+    """History rows offset, offset+1, … from states.
+
+    The states are either the rows of Y (``tq`` empty) or the DOP853 interpolant (segments
+    ``seg_t``, ``seg_h``, ``coef``) at the times ``tq``, sorted along the direction of integration and
+    found by walking the segments once.  Per mode:
+
+    * aligned: y = [v, Φ], R = R₀ exp(Φẑ/2), spins constant;
+    * coprecessing: y = [v, χ₁, χ₂, R_p, Φ], R = R_p exp(Φẑ/2);
+    * orbital: y = [v, χ₁, χ₂, R, Φ].
+
+    exp(Φẑ/2) = (cos Φ/2, 0, 0, sin Φ/2) and q·(c, 0, 0, s) = (wc − zs, xc + ys, yc − xs, zc + ws).
+    """
+    dense = tq.size > 0
+    nrow = tq.size if dense else Y.shape[0]
+    nseg = seg_t.size
+    n = coef.shape[2] if dense else Y.shape[1]
+    y = np.empty(n)
+    j = 0
+    for q in range(nrow):
+        if dense:
+            t = tq[q]
+            while j + 1 < nseg and (t - seg_t[j + 1]) * seg_h[j + 1] >= 0.0:
+                j += 1
+            contd8(coef[j], (t - seg_t[j]) / seg_h[j], y)
+        else:
+            for k in range(n):
+                y[k] = Y[q, k]
+        i = offset + q
+        if mode == MODE_ALIGNED:
+            ph = y[1]
+            c = math.cos(0.5 * ph)
+            s = math.sin(0.5 * ph)
+            _store_row(i, y[0], ph, R0[0] * c - R0[3] * s, R0[1] * c + R0[2] * s, R0[2] * c - R0[1] * s,
+                       R0[3] * c + R0[0] * s, v, Phi, R, ell)
+            for k in range(3):
+                chi1[i, k] = c1[k]
+                chi2[i, k] = c2[k]
+        else:
+            ph = y[11]
+            if mode == MODE_COPRECESSING:
+                c = math.cos(0.5 * ph)
+                s = math.sin(0.5 * ph)
+                _store_row(i, y[0], ph, y[7] * c - y[10] * s, y[8] * c + y[9] * s, y[9] * c - y[8] * s,
+                           y[10] * c + y[7] * s, v, Phi, R, ell)
+            else:
+                _store_row(i, y[0], ph, y[7], y[8], y[9], y[10], v, Phi, R, ell)
+            for k in range(3):
+                chi1[i, k] = y[1 + k]
+                chi2[i, k] = y[4 + k]
+
+
+_NO_T = np.empty(0)
+_NO_Y = np.empty((0, 1))
+_NO_SEG = np.empty(1)
+_NO_COEF = np.empty((1, 8, 1))
+
+
+def _allocate_history(n):
+    return (np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 3)))
 
 
 def _phase_times(dense, phi_index, v_index, targets):
@@ -370,8 +428,8 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     t_int = time.perf_counter()
     res_f = dop853(rhs, 0.0, y0, 4.0 * tau0 + 1.0e4, atol, rtol=rtol, args=p, max_steps=max_steps,
                    t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS,
-                   event_direction=np.array([1.0, 0.0, 0.0, 0.0, 0.0]))
-    term_f = _status_to_termination(res_f, "f_max" if f_max is not None else "v_max")
+                   event_direction=np.array([1.0, 0.0, 0.0, 0.0, 0.0, -1.0]))
+    term_f = _status_to_termination(res_f, "f_max" if f_max is not None else "v_max", approximant)
     # ---- backward --------------------------------------------------------------------------------
     res_b = None
     term_b = "not_integrated"
@@ -381,22 +439,27 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         t_back = -(2.0 * (_ini.newtonian_time_to_coalescence(v_min, nu) - tau0) + 1.0e4)
         res_b = dop853(rhs, 0.0, y0, t_back, atol, rtol=rtol, args=pb, max_steps=max_steps,
                        t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS,
-                       event_direction=np.array([-1.0, 0.0, 0.0, 0.0, 0.0]))
-        term_b = _status_to_termination(res_b, "f_min")
+                       event_direction=np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0]))
+        term_b = _status_to_termination(res_b, "f_min", approximant)
     t_int = time.perf_counter() - t_int
 
     # ---- sampling --------------------------------------------------------------------------------
     phi_i = _sys.YA_PHI if use_aligned else _sys.Y_PHI
     v_i = _sys.YA_V
-    if mode == "final":
-        t_out = np.array([res_f.t[-1]])
-        Y = res_f.y[-1:]
-    elif mode == "steps":
-        if res_b is not None:
-            t_out = np.concatenate((res_b.t[:0:-1], res_f.t))
-            Y = np.concatenate((res_b.y[:0:-1], res_f.y))
+    out_mode = MODE_ALIGNED if use_aligned else (MODE_ORBITAL if rotor == "orbital" else MODE_COPRECESSING)
+    R0c = np.ascontiguousarray(R0, dtype=np.float64)
+    if mode in ("final", "steps"):
+        if mode == "final":
+            parts = [(res_f.t[-1:], res_f.y[-1:])]
         else:
-            t_out, Y = res_f.t, res_f.y
+            parts = ([(res_b.t[:0:-1], res_b.y[:0:-1])] if res_b is not None else []) + [(res_f.t, res_f.y)]
+        t_out = np.concatenate([tp for tp, _ in parts])
+        hist = _allocate_history(t_out.size)
+        off = 0
+        for tp, Yp in parts:
+            _fill_history(out_mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, np.ascontiguousarray(Yp), R0c, c1, c2,
+                          off, *hist)
+            off += tp.size
     else:
         if mode == "dt":
             dt = sval / M_sec
@@ -405,7 +468,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
             tf = tf[tf <= res_f.dense.t_max]
             if res_b is not None:
                 k_lo = math.ceil(res_b.dense.t_max / dt * (1.0 + 1e-15))
-                tb = np.arange(k_lo, 0) * dt
+                tb = np.arange(-1, k_lo - 1, -1) * dt          # 0 > tb, along the backward direction
                 tb = tb[tb >= res_b.dense.t_max]
             else:
                 tb = np.empty(0)
@@ -417,16 +480,24 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
             tf[0] = 0.0
             if res_b is not None:
                 phi_start = res_b.y[-1, phi_i]
-                targets_b = np.arange(math.ceil(phi_start / step), 0) * step
+                targets_b = np.arange(-1, math.ceil(phi_start / step) - 1, -1) * step
                 tb = _phase_times(res_b.dense, phi_i, v_i, targets_b)
             else:
                 tb = np.empty(0)
-        Yf = res_f.dense(tf)
-        Yb = res_b.dense(tb) if tb.size else np.empty((0, y0.size))
-        t_out = np.concatenate((tb, tf))
-        Y = np.concatenate((Yb, Yf))
-
-    v, Phi, x1, x2, R, ellh = _states_to_history(Y, use_aligned, rotor, R0, c1, c2)
+        t_out = np.concatenate((tb[::-1], tf))
+        hist = _allocate_history(t_out.size)
+        if tb.size:
+            # backward samples are produced along the backward direction, then reversed in place
+            hb = _allocate_history(tb.size)
+            d = res_b.dense
+            _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, np.ascontiguousarray(tb), _NO_Y, R0c, c1, c2, 0,
+                          *hb)
+            for dst, src in zip(hist, hb):
+                dst[:tb.size] = src[::-1]
+        d = res_f.dense
+        _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, np.ascontiguousarray(tf), _NO_Y, R0c, c1, c2,
+                      tb.size, *hist)
+    v, Phi, x1, x2, R, ellh = hist
 
     halves = {"forward": res_f, "backward": res_b}
     stats = {}

@@ -38,7 +38,11 @@ Equations (units G = c = M = 1, t in units of M)
 
 Events (all terminal), filled by :func:`events_precessing` / :func:`events_aligned`:
   0: v − v_end (requested end frequency, or v_max);   1: Ê′ (E′ = −νvÊ′ ≥ 0 ⇔ Ê′ ≤ 0);
-  2: N·D (sign of v̇);   3, 4: (1 + SPIN_TOL) − |χᵢ|².
+  2: N·D (sign of v̇);   3, 4: (1 + SPIN_TOL) − |χᵢ|²;
+  5: D − DEN_EPS: the denominator of v̇ (Ê′ for T1, the re-expanded Ê′/F̂ for T5; 1 for T4) about to
+     vanish.  v̇ = K/D has a pole there with v* − v ∝ √(t* − t), which no step can cross; stopping at
+     D = DEN_EPS = 1e-3 leaves t* − t ≈ DEN_EPS²/(2K|dD/dv|) ~ 1e-4 M (a phase of ~1e-5 rad) and
+     v* − v ~ 1e-3.  (With 1e-6 the remaining interval, ~1e-10 M, is below the resolution of t ~ 1e5.)
 """
 
 import math
@@ -63,8 +67,8 @@ YA_V = 0
 YA_PHI = 1
 N_ALIGNED = 2
 
-N_EVENTS = 5
-EV_V_END, EV_ENERGY, EV_VDOT, EV_SPIN1, EV_SPIN2 = range(N_EVENTS)
+N_EVENTS = 6
+EV_V_END, EV_ENERGY, EV_VDOT, EV_SPIN1, EV_SPIN2, EV_POLE = range(N_EVENTS)
 
 # ---------------------------------------------------------------------------------------------------
 # parameter vector layout
@@ -90,6 +94,7 @@ P_NUM_LEN = 29   # number of powers of v to evaluate in N, D, Ê′
 P_DEN_LEN = 30
 P_EP_LEN = 31
 P_SPINTOL = 32   # |χ|² may exceed 1 by this much before event 3/4 fires
+P_DEN_EPS = 33   # event 5 fires when the denominator D of v̇ falls to this value
 P_SERIES = 40
 SERIES_SIZE = NK * NB * NL
 P_NUM = P_SERIES
@@ -98,6 +103,7 @@ P_EP = P_DEN + SERIES_SIZE
 P_SIZE = P_EP + SERIES_SIZE
 
 SPIN_TOL = 1e-10
+DEN_EPS = 1e-3
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -236,6 +242,7 @@ def events_precessing(t, y, p, g):
     g[EV_VDOT] = num * den
     g[EV_SPIN1] = 1.0 + p[P_SPINTOL] - s11
     g[EV_SPIN2] = 1.0 + p[P_SPINTOL] - s22
+    g[EV_POLE] = den - p[P_DEN_EPS]
 
 
 @njit(RHS_SIG, cache=True)
@@ -263,6 +270,7 @@ def events_aligned(t, y, p, g):
     g[EV_VDOT] = num * den
     g[EV_SPIN1] = 1.0
     g[EV_SPIN2] = 1.0
+    g[EV_POLE] = den - p[P_DEN_EPS]
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -332,6 +340,7 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     p[P_L2] = L2 if inc["so_nlo"] else 0.0
     p[P_L4] = L4 if inc["so_nnlo"] else 0.0
     p[P_SPINTOL] = SPIN_TOL
+    p[P_DEN_EPS] = DEN_EPS
 
     N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2)
     if aligned_basis is not None:
