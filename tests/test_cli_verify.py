@@ -1,0 +1,82 @@
+"""`pnrotor verify` and `pnrotor bench` through the CLI dispatcher: output, exit status, files."""
+
+import csv
+
+import pytest
+
+from pnrotor import hdf5
+from pnrotor.cli import main
+
+
+def test_verify_prints_the_error_and_passes(capsys):
+    assert main(["verify", "--t-end", "2e4"]) == 0
+    out = capsys.readouterr().out
+    assert "rotor, DOP853, atol 1e-12" in out and "max δ" in out and "evaluations" in out
+    max_delta = float(out.split("max δ")[1].split()[0])
+    assert 1e-12 < max_delta < 1e-10
+    assert out.rstrip().endswith("OK")
+
+
+def test_verify_fails_above_the_limit_and_reports_resets(capsys):
+    code = main(["verify", "--t-end", "2e4", "--formulation", "generator", "--method", "BS", "--atol", "1e-6",
+                 "--max-error", "1e-9"])
+    out = capsys.readouterr().out
+    assert code == 1 and "FAILED: max δ above the limit" in out
+    assert "Bulirsch-Stoer" in out and int(out.split("generator resets")[1].split()[0]) >= 20
+
+
+def test_verify_fails_when_the_integration_does_not_reach_T(capsys):
+    # the paper's binary passes within ~1e-8 of R = −1 at t = 760000, where the unreset generator is singular
+    code = main(["verify", "--formulation", "generator-noreset", "--atol", "1e-12", "--t-end", "7.7e5"])
+    out = capsys.readouterr().out
+    assert code == 1 and "integration did not reach T" in out and "status           -2" in out
+
+
+def test_verify_writes_the_history(tmp_path, capsys):
+    path = tmp_path / "run.h5"
+    assert main(["verify", "--t-end", "3e3", "--formulation", "vectors2", "-o", str(path)]) == 0
+    history = hdf5.read(path)
+    assert history.formulation == "vectors2" and history.t[-1] == 3e3 and history.status == 0
+    assert main(["verify", "--t-end", "3e3", "-o", str(path)]) == 2  # exists
+    assert "--overwrite" in capsys.readouterr().err
+    assert main(["verify", "--t-end", "3e3", "-o", str(path), "--overwrite"]) == 0
+    assert hdf5.read(path).formulation == "rotor"
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--formulation", "quaternion"], "unknown formulation"),
+    (["--method", "RK4"], "unknown method"),
+    (["--t-end", "0"], "--t-end"),
+    (["--max-error", "-1"], "--max-error"),
+])
+def test_verify_rejects_bad_input(args, message, capsys):
+    assert main(["verify", *args]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_bench_writes_the_table_figures_and_findings(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    out_dir = tmp_path / "bench"
+    assert main(["bench", "--t-end", "3e3", "--atols", "1e-6", "1e-9", "--repeat", "1", "-o", str(out_dir)]) == 0
+    out = capsys.readouterr().out
+    with open(out_dir / "bench.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert list(rows[0])[:8] == ["formulation", "method", "atol", "max_delta", "wall_s", "nfev", "steps", "resets"]
+    studies = {}
+    for r in rows:
+        studies.setdefault(r["study"], set()).add((r["formulation"], r["method"], float(r["atol"]), r["damping"]))
+    assert len(studies["sweep"]) == 6 * 2 * 2  # every formulation × method × atol
+    assert studies["baseline"] == {("rotor", "scipy-DOP853", a, "") for a in (1e-6, 1e-9)}
+    assert studies["equal-rtol"] == {("rotor", "DOP853", a, "") for a in (1e-6, 1e-9)}
+    assert studies["damping"] == {("vectors-damped", m, 1e-8, rate) for m in ("DOP853", "Bulirsch-Stoer")
+                                  for rate in ("0.0", "0.001", "0.01", "0.1", "1.0")}
+    for r in rows:
+        assert int(r["status"]) == 0 and float(r["t_final"]) == 3e3
+        assert float(r["max_delta"]) < 1e3 * float(r["atol"])
+    assert (out_dir / "error_vs_time.png").stat().st_size > 0 and (out_dir / "max_error.png").stat().st_size > 0
+    assert "Findings:" in out and "× pnrotor's wall time" in out and "generator without reset / with reset" in out
+
+
+def test_bench_rejects_bad_input(tmp_path, capsys):
+    assert main(["bench", "--atols", "0", "-o", str(tmp_path)]) == 2
+    assert "--atols" in capsys.readouterr().err
