@@ -175,8 +175,11 @@ def energy_series(X1, kappa1=1.0, kappa2=1.0):
 
 def energy_derivative_series(E):
     """Ê′ with E′ = dE/dv = −ν v Ê′, from Ê: d/dv[v^{k+2}(e + e_L ln v)] = v^{k+1}[(k+2)(e + e_L ln v) + e_L]."""
-    D = np.zeros_like(E)
-    for k in range(E.shape[0]):
-        D[k, :, 0] = 0.5 * ((k + 2) * E[k, :, 0] + E[k, :, 1])
-        D[k, :, 1] = 0.5 * (k + 2) * E[k, :, 1]
+    D = np.empty_like(E)
+    kp2 = _KP2[:E.shape[0]]
+    D[:, :, 0] = 0.5 * (kp2 * E[:, :, 0] + E[:, :, 1])
+    D[:, :, 1] = 0.5 * kp2 * E[:, :, 1]
     return D
+
+
+_KP2 = (np.arange(64) + 2.0)[:, None]

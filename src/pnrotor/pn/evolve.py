@@ -58,6 +58,11 @@ TERMINATION_MESSAGES = {
 MAX_SO_ORDER = 4.0
 MAX_SS_ORDER = 3.0
 
+CONTROLLER = dict(safety=0.85, max_factor=4.0)
+"""DOP853 step-size controller for the inspiral.  With Hairer's defaults (0.9, 6) the accelerating chirp
+makes every few steps a rejection (18–57 of 116–216 attempts in the LALSuite comparison cases); with
+(0.85, 4) there are none and the runs cost 10–35% fewer evaluations (benchmarks/bench_pn.py)."""
+
 
 @dataclass
 class Evolution:
@@ -196,7 +201,7 @@ def _store_row(i, vv, ph, w, x, yy, z, v, Phi, R, ell):
 
 
 @njit(cache=True)
-def _fill_history(mode, seg_t, seg_h, coef, tq, Y, R0, c1, c2, offset, v, Phi, chi1, chi2, R, ell):
+def _fill_history(mode, seg_t, seg_h, coef, tq, Y, R0, ell0, c1, c2, offset, v, Phi, chi1, chi2, R, ell):
     """History rows offset, offset+1, … from states.
 
     The states are either the rows of Y (``tq`` empty) or the DOP853 interpolant (segments
@@ -226,12 +231,18 @@ def _fill_history(mode, seg_t, seg_h, coef, tq, Y, R0, c1, c2, offset, v, Phi, c
                 y[k] = Y[q, k]
         i = offset + q
         if mode == MODE_ALIGNED:
+            # R₀ is a unit rotor and ℓ̂ = R₀ ẑ R₀⁻¹ is constant (rotations about ẑ fix it): ell0 = ℓ̂
             ph = y[1]
             c = math.cos(0.5 * ph)
             s = math.sin(0.5 * ph)
-            _store_row(i, y[0], ph, R0[0] * c - R0[3] * s, R0[1] * c + R0[2] * s, R0[2] * c - R0[1] * s,
-                       R0[3] * c + R0[0] * s, v, Phi, R, ell)
+            v[i] = y[0]
+            Phi[i] = ph
+            R[i, 0] = R0[0] * c - R0[3] * s
+            R[i, 1] = R0[1] * c + R0[2] * s
+            R[i, 2] = R0[2] * c - R0[1] * s
+            R[i, 3] = R0[3] * c + R0[0] * s
             for k in range(3):
+                ell[i, k] = ell0[k]
                 chi1[i, k] = c1[k]
                 chi2[i, k] = c2[k]
         else:
@@ -390,12 +401,12 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     kmax = kmax_from_orders(pn_order, so_order, ss_order)
     a1, a2 = float(np.dot(ell, c1)), float(np.dot(ell, c2))
     bvals = basis_values(a1, a2, float(np.dot(c1, c2)), float(np.dot(c1, c1)), float(np.dot(c2, c2)))
+    N, D, Ep = _sys.vdot_series(X1, approximant, kmax, kappa1, kappa2)
     p = _sys.make_parameters(X1, approximant, kmax, so_order=so_order, ss_order=ss_order, kappa1=kappa1,
                              kappa2=kappa2, v_end=v_max, rotor=rotor, phase_shift=precession_phase_shift,
-                             aligned_basis=bvals if use_aligned else None)
+                             aligned_basis=bvals if use_aligned else None, series=(N, D, Ep))
 
     # ---- validity at f_ref -------------------------------------------------------------------------
-    N, D, Ep = _sys.vdot_series(X1, approximant, kmax, kappa1, kappa2)
     n0, d0, e0 = (float(evaluate(S, v0, bvals)) for S in (N, D, Ep))
     if not e0 > 0.0:
         raise ValueError(f"E'(v) >= 0 at f_ref (v = {v0:.4g}): the PN energy balance is invalid there")
@@ -427,7 +438,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     # ---- forward ---------------------------------------------------------------------------------
     t_int = time.perf_counter()
     res_f = dop853(rhs, 0.0, y0, 4.0 * tau0 + 1.0e4, atol, rtol=rtol, args=p, max_steps=max_steps,
-                   t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS,
+                   t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS, **CONTROLLER,
                    event_direction=np.array([1.0, 0.0, 0.0, 0.0, 0.0, -1.0]))
     term_f = _status_to_termination(res_f, "f_max" if f_max is not None else "v_max", approximant)
     # ---- backward --------------------------------------------------------------------------------
@@ -438,7 +449,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         pb[_sys.P_VEND] = v_min
         t_back = -(2.0 * (_ini.newtonian_time_to_coalescence(v_min, nu) - tau0) + 1.0e4)
         res_b = dop853(rhs, 0.0, y0, t_back, atol, rtol=rtol, args=pb, max_steps=max_steps,
-                       t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS,
+                       t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS, **CONTROLLER,
                        event_direction=np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0]))
         term_b = _status_to_termination(res_b, "f_min", approximant)
     t_int = time.perf_counter() - t_int
@@ -457,7 +468,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         hist = _allocate_history(t_out.size)
         off = 0
         for tp, Yp in parts:
-            _fill_history(out_mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, np.ascontiguousarray(Yp), R0c, c1, c2,
+            _fill_history(out_mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, np.ascontiguousarray(Yp), R0c, ell, c1, c2,
                           off, *hist)
             off += tp.size
     else:
@@ -490,12 +501,12 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
             # backward samples are produced along the backward direction, then reversed in place
             hb = _allocate_history(tb.size)
             d = res_b.dense
-            _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, np.ascontiguousarray(tb), _NO_Y, R0c, c1, c2, 0,
+            _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, np.ascontiguousarray(tb), _NO_Y, R0c, ell, c1, c2, 0,
                           *hb)
             for dst, src in zip(hist, hb):
                 dst[:tb.size] = src[::-1]
         d = res_f.dense
-        _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, np.ascontiguousarray(tf), _NO_Y, R0c, c1, c2,
+        _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, np.ascontiguousarray(tf), _NO_Y, R0c, ell, c1, c2,
                       tb.size, *hist)
     v, Phi, x1, x2, R, ellh = hist
 

@@ -123,6 +123,6 @@ def orthonormal_frame(ell_hat, n_hat, tol=1e-8):
 def frame_rotor(ell, n):
     """Unit rotor R₀ with R₀ x̂ R₀⁻¹ = n̂, R₀ ẑ R₀⁻¹ = ℓ̂ (and ŷ → λ̂ = ℓ̂ × n̂)."""
     from ..quaternion import qfrom_matrix
-    lam = np.cross(ell, n)
-    M = np.column_stack((n, lam, ell))
-    return np.asarray(qfrom_matrix(np.ascontiguousarray(M)))
+    lam = (ell[1] * n[2] - ell[2] * n[1], ell[2] * n[0] - ell[0] * n[2], ell[0] * n[1] - ell[1] * n[0])
+    M = np.array([[n[0], lam[0], ell[0]], [n[1], lam[1], ell[1]], [n[2], lam[2], ell[2]]])
+    return np.asarray(qfrom_matrix(M))

@@ -161,7 +161,9 @@ def fold_basis(C, basis_values):
     Used for aligned-spin and nonspinning runs, where the invariants are constants of the motion.
     """
     out = new_series()
-    out[:, 0, :] = np.einsum("kbl,b->kl", C, np.asarray(basis_values, dtype=np.float64))
+    b = np.asarray(basis_values, dtype=np.float64)
+    out[:, 0, 0] = C[:, :, 0] @ b
+    out[:, 0, 1] = C[:, :, 1] @ b
     return out
 
 
@@ -174,16 +176,18 @@ def evaluate(C, v, basis):
     """Evaluate a series at v (numpy reference, vectorized over v) with fixed basis values."""
     v = np.asarray(v, dtype=np.float64)
     lnv = np.log(v)
-    coef = np.einsum("kbl,b->kl", C, np.asarray(basis, dtype=np.float64))
+    b = np.asarray(basis, dtype=np.float64)
+    c0 = C[:, :, 0] @ b
+    c1 = C[:, :, 1] @ b
     out = np.zeros_like(v)
     for k in range(NK - 1, -1, -1):
-        out = out * v + coef[k, 0] + coef[k, 1] * lnv
+        out = out * v + c0[k] + c1[k] * lnv
     return out
 
 
 def last_nonzero_power(C):
     """1 + the largest k with a nonzero coefficient (number of Horner terms needed); 0 if C == 0."""
-    nz = np.nonzero(np.any(C != 0.0, axis=(1, 2)))[0]
+    nz = np.flatnonzero(C.reshape(C.shape[0], -1).any(axis=1))
     return int(nz[-1]) + 1 if nz.size else 0
 
 

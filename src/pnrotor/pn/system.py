@@ -301,12 +301,12 @@ def vdot_series(X1, approximant, kmax, kappa1=1.0, kappa2=1.0):
 
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
-                    rotor="coprecessing", phase_shift=False, aligned_basis=None):
+                    rotor="coprecessing", phase_shift=False, aligned_basis=None, series=None):
     """Build the parameter vector p.
 
     ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
     invariants for the aligned/nonspinning right-hand side (folded into the series), or None for the
-    precessing one.
+    precessing one.  ``series``: (N, D, Ê′) from :func:`vdot_series` if already computed.
     """
     from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms,
                              spin_orbit_precession, spin_spin_precession_2pn, spin_spin_precession_3pn)
@@ -342,7 +342,7 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     p[P_SPINTOL] = SPIN_TOL
     p[P_DEN_EPS] = DEN_EPS
 
-    N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2)
+    N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2) if series is None else series
     if aligned_basis is not None:
         N, D, Ep = (fold_basis(S, aligned_basis) for S in (N, D, Ep))
     p[P_NUM:P_NUM + SERIES_SIZE] = N.ravel()
