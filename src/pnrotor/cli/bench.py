@@ -40,8 +40,8 @@ DAMPING_PROBE = {"atol": 1e-8, "t_end": 1e5, "rates": [0.0, 0.001, 0.01, 0.1, 1.
 """Stiffness probe: vectors-damped with λ = μ = each rate (0 is vectors2), at one tolerance, over
 min(T, t_end) (the stiff runs take ~10⁵ steps per 10⁵ time units at rate 1)."""
 
-TARGET_DELTA = 1e-8
-"""Accuracy at which the cost of the formulations is compared (interpolated between tolerances)."""
+TARGET_DELTAS = (1e-6, 1e-10)
+"""Accuracies (max δ) at which costs are compared, interpolated between tolerances."""
 
 SCIPY = "scipy-DOP853"
 SCIPY_RTOL = 100 * sys.float_info.epsilon
@@ -286,13 +286,17 @@ def summary(rows, t_end):
                      f"{b['max_delta']:.3g} ({b['formulation']}, {b['method']}, atol {b['atol']:g})")
     others = [f for f in FORMULATION_NAMES if f != "rotor"]
     for method in METHOD_NAMES:
-        lines.append(f"  {method}, cost relative to the rotor:")
-        ev = ", ".join(f"{f} {_ratio(rows, 'nfev', (f, method), ('rotor', method), atols):.2f}" for f in others)
-        lines.append(f"    evaluations at equal atol (geometric mean): {ev}")
-        for key, what in (("nfev", "evaluations"), ("wall_s", "wall time")):
-            base = cost_at(rows, "rotor", method, key, TARGET_DELTA)
-            ratios = ", ".join(f"{f} {cost_at(rows, f, method, key, TARGET_DELTA) / base:.2f}" for f in others)
-            lines.append(f"    {what} at equal accuracy (max δ = {TARGET_DELTA:g}, interpolated): {ratios}")
+        lines.append(f"  {method}, cost relative to the rotor (evaluations / wall time):")
+        ev = ", ".join(f"{f} {_ratio(rows, 'nfev', (f, method), ('rotor', method), atols):.2f}"
+                       f" / {_ratio(rows, 'wall_s', (f, method), ('rotor', method), atols):.2f}" for f in others)
+        lines.append(f"    at equal atol (geometric mean): {ev}")
+        for target in TARGET_DELTAS:
+            cells = []
+            for f in others:
+                ratios = [cost_at(rows, f, method, key, target) / cost_at(rows, "rotor", method, key, target)
+                          for key in ("nfev", "wall_s")]
+                cells.append(f"{f} " + (" / ".join(f"{x:.2f}" for x in ratios) if math.isfinite(ratios[0]) else "n/a"))
+            lines.append(f"    at equal accuracy, max δ = {target:g} (interpolated): " + ", ".join(cells))
         lines.append(f"    generator without reset / with reset: "
                      f"{_ratio(rows, 'nfev', ('generator-noreset', method), ('generator', method), atols):.2f}× "
                      f"evaluations at equal atol")
@@ -309,12 +313,15 @@ def summary(rows, t_end):
                      + ("" if r["status"] == 0 else f" (status {r['status']})")
                      for r in probe if r["method"] == method]
             lines.append(f"    {method}: " + "; ".join(cells))
+    lines.append("  Bulirsch-Stoer / DOP853 (steps, evaluations, wall time):")
     for name in ("rotor", "generator", "vectors3"):
-        steps = _ratio(rows, "steps", (name, "Bulirsch-Stoer"), (name, "DOP853"), atols)
-        ev = _ratio(rows, "nfev", (name, "Bulirsch-Stoer"), (name, "DOP853"), atols)
-        wall = _ratio(rows, "wall_s", (name, "Bulirsch-Stoer"), (name, "DOP853"), atols)
-        lines.append(f"  Bulirsch-Stoer / DOP853, {name}, at equal atol: steps {steps:.2f}×, evaluations {ev:.2f}×, "
-                     f"wall time {wall:.2f}×")
+        bs, dp = (name, "Bulirsch-Stoer"), (name, "DOP853")
+        at_atol = [_ratio(rows, key, bs, dp, atols) for key in ("steps", "nfev", "wall_s")]
+        target = TARGET_DELTAS[-1]
+        at_delta = [cost_at(rows, *bs, key, target) / cost_at(rows, *dp, key, target)
+                    for key in ("steps", "nfev", "wall_s")]
+        lines.append(f"    {name}: at equal atol {' / '.join(f'{x:.2f}' for x in at_atol)}; "
+                     f"at max δ = {target:g} {' / '.join(f'{x:.2f}' for x in at_delta)}")
     return lines
 
 
