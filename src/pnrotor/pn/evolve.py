@@ -80,7 +80,8 @@ class Evolution:
     termination : str — why the forward integration stopped (see module docstring)
     stats : dict — nfev, nsteps, naccepted, nrejected (both halves), per-half counts, wall times,
         backward termination, messages
-    inputs : dict — every input, with units in the key names
+    inputs : dict — every input, with units in the key names; only floats, ints, bools, strings and
+        lists of floats (absent f_min/f_max and the value of 'steps'/'final' sampling are NaN)
     """
 
     t: np.ndarray
@@ -415,10 +416,10 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
 
     inputs = {
         "m1_Msun": m1, "m2_Msun": m2, "chi1": c1.tolist(), "chi2": c2.tolist(), "f_ref_Hz": f_ref,
-        "f_min_Hz": f_min, "f_max_Hz": f_max, "approximant": approximant, "pn_order": pn_order,
+        "f_min_Hz": math.nan if f_min is None else f_min, "f_max_Hz": math.nan if f_max is None else f_max, "approximant": approximant, "pn_order": pn_order,
         "spin_orbit_order": so_order, "spin_spin_order": ss_order, "ell_hat": ell.tolist(),
         "n_hat": n.tolist(), "kappa1": kappa1, "kappa2": kappa2, "atol": float(atol), "rtol": float(rtol),
-        "sampling": mode, "sampling_value": sval, "rotor": rotor,
+        "sampling": mode, "sampling_value": math.nan if sval is None else float(sval), "rotor": rotor,
         "precession_phase_shift": bool(precession_phase_shift), "integrate_rotor": bool(integrate_rotor),
         "max_steps": int(max_steps), "M_seconds": M_sec, "v_ref": v0, "spin_content": spin_content,
         "state": "aligned" if use_aligned else "precessing",

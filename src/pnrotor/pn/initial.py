@@ -98,8 +98,8 @@ def spin_vector(chi, name):
         raise ValueError(f"{name} must be a 3-vector, got shape {c.shape}")
     if not np.all(np.isfinite(c)):
         raise ValueError(f"{name} must be finite, got {c}")
-    if np.dot(c, c) > 1.0 + 1e-14:
-        raise ValueError(f"|{name}| = {np.linalg.norm(c)!r} exceeds 1")
+    if float(c @ c) > 1.0 + 1e-14:
+        raise ValueError(f"|{name}| = {math.sqrt(float(c @ c))!r} exceeds 1")
     return c.copy()
 
 
@@ -110,13 +110,13 @@ def orthonormal_frame(ell_hat, n_hat, tol=1e-8):
     for name, a in (("ell_hat", ell), ("n_hat", n)):
         if a.shape != (3,) or not np.all(np.isfinite(a)):
             raise ValueError(f"{name} must be a finite 3-vector, got {a!r}")
-        if abs(np.linalg.norm(a) - 1.0) > tol:
-            raise ValueError(f"{name} must be a unit vector (|{name}| = {np.linalg.norm(a)!r})")
-    if abs(np.dot(ell, n)) > tol:
-        raise ValueError(f"n_hat must be orthogonal to ell_hat (n̂·ℓ̂ = {np.dot(ell, n)!r})")
-    ell = ell / np.linalg.norm(ell)
-    n = n - np.dot(n, ell) * ell
-    n = n / np.linalg.norm(n)
+        if abs(math.sqrt(float(a @ a)) - 1.0) > tol:
+            raise ValueError(f"{name} must be a unit vector (|{name}| = {math.sqrt(float(a @ a))!r})")
+    if abs(float(ell @ n)) > tol:
+        raise ValueError(f"n_hat must be orthogonal to ell_hat (n̂·ℓ̂ = {float(ell @ n)!r})")
+    ell = ell / math.sqrt(float(ell @ ell))
+    n = n - float(n @ ell) * ell
+    n = n / math.sqrt(float(n @ n))
     return ell, n
 
 

@@ -35,6 +35,8 @@ convention of LALSuite's TaylorT4 and of PostNewtonian.jl's ``truncated_series_r
 two logarithms first occur at v¹² and are outside this representation (checked).
 """
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -174,11 +176,18 @@ def basis_values(a1, a2, s12, s11, s22):
 
 def evaluate(C, v, basis):
     """Evaluate a series at v (numpy reference, vectorized over v) with fixed basis values."""
-    v = np.asarray(v, dtype=np.float64)
-    lnv = np.log(v)
     b = np.asarray(basis, dtype=np.float64)
     c0 = C[:, :, 0] @ b
     c1 = C[:, :, 1] @ b
+    if np.ndim(v) == 0:
+        v = float(v)
+        lnv = math.log(v)
+        acc = 0.0
+        for k in range(NK - 1, -1, -1):
+            acc = acc * v + float(c0[k]) + float(c1[k]) * lnv
+        return acc
+    v = np.asarray(v, dtype=np.float64)
+    lnv = np.log(v)
     out = np.zeros_like(v)
     for k in range(NK - 1, -1, -1):
         out = out * v + c0[k] + c1[k] * lnv

@@ -287,7 +287,7 @@ def vdot_series(X1, approximant, kmax, kappa1=1.0, kappa2=1.0):
     from .series import divide, new_series, truncate
 
     E = truncate(energy_series(X1, kappa1, kappa2), kmax)
-    Ep = truncate(energy_derivative_series(E), kmax)
+    Ep = energy_derivative_series(E)   # the derivative keeps the powers of v, so it stays truncated
     F = truncate(flux_series(X1, kappa1, kappa2), kmax)
     one = new_series()
     one[0, 0, 0] = 1.0
