@@ -238,3 +238,58 @@ def test_aligned_rhs_matches_precessing_rhs_for_aligned_spins():
     assert da[0] == pytest.approx(dp[0], rel=1e-14)
     assert da[1] == dp[11]
     assert np.all(dp[1:11] == 0.0)
+
+
+def _omega_from_rdot(R, Rdot):
+    """Ω with Ṙ = ½ (0, Ω) R: (0, Ω) = 2 Ṙ R⁻¹ = 2 Ṙ R̄ / |R|²."""
+    w, x, y, z = R
+    a, b, c, d = Rdot
+    m = R @ R
+    # vector part of Ṙ R̄
+    vx = -a * x + b * w - c * z + d * y
+    vy = -a * y + b * z + c * w - d * x
+    vz = -a * z - b * y + c * x + d * w
+    return 2.0 * np.array([vx, vy, vz]) / m
+
+
+def test_instantaneous_precession_averages_to_averaged_model():
+    """Averaged over the orbital phase, the instantaneous spin precession (n̂-dependent spin-spin terms)
+    equals the orbit-averaged one, and the instantaneous frame velocity v³ℓ̂ + ϖn̂ averages to
+    v³ℓ̂ + ⟨ϖn̂⟩ (the 'averaged_varpi' Ω_ℓ without the spin-spin torque)."""
+    from pnrotor.pn.initial import frame_rotor
+    X1, k1, k2 = 0.7, 2.0, 4.0
+    kmax = kmax_from_orders(3.5, 3.5, 3.0)
+    common = dict(so_order=3.5, ss_order=3.0, kappa1=k1, kappa2=k2)
+    p_inst = system.make_parameters(X1, "T4", kmax, rotor="orbital", **common)
+    p_avg = system.make_parameters(X1, "T4", kmax, rotor="coprecessing", omega_l="varpi", **common)
+    p_so = system.make_parameters(X1, "T4", kmax_from_orders(3.5, 3.5, -1), rotor="coprecessing", omega_l="varpi",
+                                  so_order=3.5, ss_order=-1, kappa1=k1, kappa2=k2)
+    ell = np.array([0.2, 0.3, 0.9])
+    ell /= np.linalg.norm(ell)
+    n0 = np.cross(ell, [1.0, 0, 0])
+    n0 /= np.linalg.norm(n0)
+    R0 = frame_rotor(ell, n0)
+    c1, c2 = np.array([0.4, -0.3, 0.2]), np.array([0.1, 0.5, -0.6])
+    v = 0.33
+    K = 64
+    chidot = np.zeros(6)
+    om = np.zeros(3)
+    for j in range(K):
+        phi = 2 * np.pi * j / K
+        rot = np.array([np.cos(phi / 2), 0, 0, np.sin(phi / 2)])
+        w, x, y, z = R0
+        c, s = rot[0], rot[3]
+        R = np.array([w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s])
+        y_ = np.concatenate(([v], c1, c2, R, [phi]))
+        dy = np.empty(12)
+        system.rhs_precessing_instantaneous(0.0, y_, p_inst, dy)
+        chidot += dy[1:7] / K
+        om += _omega_from_rdot(R, dy[7:11]) / K
+    ya = np.concatenate(([v], c1, c2, R0, [0.0]))
+    da = np.empty(12)
+    system.rhs_precessing(0.0, ya, p_avg, da)
+    np.testing.assert_allclose(chidot, da[1:7], rtol=1e-12, atol=1e-16)
+    ds = np.empty(12)
+    system.rhs_precessing(0.0, ya, p_so, ds)
+    om_so = _omega_from_rdot(R0, ds[7:11])
+    np.testing.assert_allclose(om - v ** 3 * ell, om_so, rtol=1e-12, atol=1e-18)

@@ -299,7 +299,7 @@ def _phase_times(dense, phi_index, v_index, targets):
 def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4", pn_order=3.5,
            spin_orbit_order=None, spin_spin_order=None, ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0),
            kappa1=1.0, kappa2=1.0, atol=1e-12, rtol=0.0, sampling="steps", rotor="coprecessing",
-           precession_phase_shift=None, integrate_rotor=False, max_steps=2_000_000):
+           precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000):
     r"""Evolve a quasi-circular (precessing) compact binary in post-Newtonian theory.
 
     Parameters
@@ -342,6 +342,14 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         Apply Φ̇ = v³ − |Ω_ℓ,LO|²/(4v³) (arXiv:1507.00406).  Default: when spin_orbit_order ≥ 3.
     integrate_rotor : bool
         Use the precessing state even for nonspinning/aligned binaries.
+    precession : {'averaged', 'averaged_varpi', 'instantaneous'}
+        'averaged' (default; LALSuite's SpinTaylor model with lscorr = 0): orbit-averaged spin
+        precession and Ω_ℓ = −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| (see :mod:`pnrotor.pn.precession`).
+        'averaged_varpi': the same, but the spin-orbit part of Ω_ℓ is the orbit average ⟨ϖ n̂⟩ of
+        Bohé et al. 2013's ϖ (Eqs. (4.3)–(4.4)); it differs from 'averaged' from NLO on.
+        'instantaneous': Ω = v³ℓ̂ + ϖn̂ with Bohé et al.'s ϖ (spin-orbit) and n̂-dependent spin-spin
+        precession, on the full orbital rotor (implies rotor='orbital', no phase shift; see
+        :mod:`pnrotor.pn.system`).
     max_steps : int
         Step limit per half.
 
@@ -372,6 +380,11 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     mode, sval = _parse_sampling(sampling)
     if not (atol > 0.0 and math.isfinite(atol)) or not (rtol >= 0.0 and math.isfinite(rtol)):
         raise ValueError("atol must be > 0 and rtol >= 0, both finite")
+    if precession not in ("averaged", "averaged_varpi", "instantaneous"):
+        raise ValueError(f"precession must be 'averaged', 'averaged_varpi' or 'instantaneous', got {precession!r}")
+    if precession == "instantaneous":
+        rotor = "orbital"
+        precession_phase_shift = False
     if precession_phase_shift is None:
         precession_phase_shift = so_order >= 3.0
 
@@ -405,7 +418,8 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     N, D, Ep = _sys.vdot_series(X1, approximant, kmax, kappa1, kappa2)
     p = _sys.make_parameters(X1, approximant, kmax, so_order=so_order, ss_order=ss_order, kappa1=kappa1,
                              kappa2=kappa2, v_end=v_max, rotor=rotor, phase_shift=precession_phase_shift,
-                             aligned_basis=bvals if use_aligned else None, series=(N, D, Ep))
+                             aligned_basis=bvals if use_aligned else None, series=(N, D, Ep),
+                             omega_l="varpi" if precession == "averaged_varpi" else "torque")
 
     # ---- validity at f_ref -------------------------------------------------------------------------
     n0, d0, e0 = (float(evaluate(S, v0, bvals)) for S in (N, D, Ep))
@@ -421,6 +435,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         "n_hat": n.tolist(), "kappa1": kappa1, "kappa2": kappa2, "atol": float(atol), "rtol": float(rtol),
         "sampling": mode, "sampling_value": math.nan if sval is None else float(sval), "rotor": rotor,
         "precession_phase_shift": bool(precession_phase_shift), "integrate_rotor": bool(integrate_rotor),
+        "precession": precession,
         "max_steps": int(max_steps), "M_seconds": M_sec, "v_ref": v0, "spin_content": spin_content,
         "state": "aligned" if use_aligned else "precessing",
     }
@@ -429,7 +444,8 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         rhs, events = _sys.rhs_aligned, _sys.events_aligned
         y0 = np.array([v0, 0.0])
     else:
-        rhs, events = _sys.rhs_precessing, _sys.events_precessing
+        rhs = _sys.rhs_precessing_instantaneous if precession == "instantaneous" else _sys.rhs_precessing
+        events = _sys.events_precessing
         y0 = np.concatenate(([v0], c1, c2, R0, [0.0]))
 
     want_dense = mode in ("dt", "per_orbit")

@@ -39,6 +39,23 @@ to the same relative order as the spin-orbit precession: L₂ with NLO, L₄ wit
 
 The frame rotor then obeys dR/dt = ½ (Φ̇ ℓ̂ + Ω_ℓ) R (see :mod:`pnrotor.pn.system`).
 
+Why the torque form is the default: it is the model LALSuite integrates (the acceptance reference) and
+it keeps J = L + S₁ + S₂ fixed except for radiation reaction along ℓ̂ (tested).  Beyond leading order
+it is *not* identical to ⟨ϖ n̂⟩ with Bohé+ 2013's ϖ: the two differ at NLO because LALSuite's |L|
+omits the spin-dependent part of L (``lscorr = 0``).  Both are available (``precession='averaged'``
+and ``'averaged_varpi'`` in :func:`pnrotor.pn.evolve`), as is the instantaneous Ω = v³ℓ̂ + ϖn̂
+(``'instantaneous'``), where ℓ̂ nutates about the averaged direction at twice the orbital frequency
+with amplitude ϖ_max/(4ω) ~ v³|Σ wᵢχᵢ⊥|/4 (~0.003–0.03 rad for the test binaries, more at the end
+of the inspiral).  Starting both from the same ℓ̂ puts the instantaneous one at an extreme of its
+nutation, so the cones differ by that amplitude and the phasing drifts apart over the inspiral
+(0.2–4 rad between the two conventions for q = 3–10 from 15 Hz): the meaning of "ℓ̂ at f_ref"
+(instantaneous or orbit-averaged) is a convention that matters at this level.
+
+Instantaneous ϖ (used only with ``precession='instantaneous'`` / ``'averaged_varpi'``)
+-----------------------------------------------------------------------------------
+ϖ = v⁶ Σᵢ (w₀ + w₂v² + w₄v⁴)ᵢ (n̂·χᵢ) from Bohé+ 2013 Eqs. (4.3)–(4.4) (:func:`varpi_coefficients`);
+its orbit average is ⟨ϖ n̂⟩ = v⁶ Σᵢ ½(w₀ + w₂v² + w₄v⁴)ᵢ χᵢ⊥.
+
 Orbital phase
 -------------
 Replacing ϖ n̂ by its average changes the phase of n̂ in the precessing frame at second order:
@@ -84,6 +101,14 @@ def spin_spin_precession_3pn(X_i, X_j, kappa_i):
       QM (×κᵢ): (n̂·Sᵢ)n̂: 3(1/(2m) + 1 − m − m²/2);  (λ̂·Sᵢ)λ̂: 3(1/m − 1).
     Averaging replaces (a·n̂)n̂ and (a·λ̂)λ̂ by ½a⊥.
     """
+    c_s, c_sn, c_sv, c_in, c_iv = spin_spin_precession_3pn_instantaneous(X_i, X_j, kappa_i)
+    return c_s, 0.5 * (c_sn + c_sv), 0.5 * (c_in + c_iv)
+
+
+def spin_spin_precession_3pn_instantaneous(X_i, X_j, kappa_i):
+    """(c_j, c_jn, c_jλ, c_in, c_iλ) of the instantaneous
+    Ωᵢ ∋ v⁸ [c_j χⱼ + c_jn (n̂·χⱼ)n̂ + c_jλ (λ̂·χⱼ)λ̂ + c_in (n̂·χᵢ)n̂ + c_iλ (λ̂·χᵢ)λ̂]
+    (QM folded into c_in, c_iλ), from the coefficients listed in :func:`spin_spin_precession_3pn`."""
     m = X_i
     c_s = -1.5 - m
     c_sn = 1.5 + 2.0 * m + m * m
@@ -92,9 +117,34 @@ def spin_spin_precession_3pn(X_i, X_j, kappa_i):
     c_iv = 3.0 - 1.5 * m - 1.5 / m
     q_n = 3.0 * (0.5 / m + 1.0 - m - 0.5 * m * m)
     q_v = 3.0 * (1.0 / m - 1.0)
-    return (c_s * X_j ** 2,
-            0.5 * (c_sn + c_sv) * X_j ** 2,
-            (0.5 * (c_in + c_iv) + kappa_i * 0.5 * (q_n + q_v)) * X_i ** 2)
+    xj2 = X_j ** 2
+    xi2 = X_i ** 2
+    return (c_s * xj2, c_sn * xj2, c_sv * xj2, (c_in + kappa_i * q_n) * xi2, (c_iv + kappa_i * q_v) * xi2)
+
+
+def varpi_coefficients(X_i, X_j):
+    """(w₀, w₂, w₄) of the instantaneous precession of the orbital plane,
+    ϖ = v⁶ Σᵢ (w₀ + w₂v² + w₄v⁴)ᵢ (n̂·χᵢ)   (spin-orbit part; M = 1).
+
+    Bohé, Marsat, Faye & Blanchet (2013), arXiv:1212.5520: frame rotation Ω = ωℓ̂ + ϖn̂ (Eq. (4.1)),
+    a_ℓ = rωϖ (Eq. (4.4)) and γ = M/r (Eq. (4.3)) give ϖ = γ a_ℓ/v³ with
+      a_ℓ = v⁷ [(7S_n + 3δΣ_n) + v²((−10 − 29ν/3)S_n + δ(−6 − 9ν/2)Σ_n)
+                + v⁴((3/2 + 59ν/4 + 52ν²/9)S_n + δ(3/2 + 73ν/8 + 17ν²/6)Σ_n)]      [Eq. (4.4)]
+      γ = v²[1 + (1 − ν/3)v² + (1 − 65ν/12)v⁴ + spin-orbit terms]                   [Eq. (4.3)]
+    re-expanded and truncated at relative v⁴ (the spin-orbit terms of γ would give spin² terms and are
+    dropped).  S_n = Σᵢ Xᵢ²(n̂·χᵢ), Σ_n = X₂(n̂·χ₂) − X₁(n̂·χ₁), δ = X₁ − X₂: for body i,
+    (n̂·χᵢ) enters S_n with Xᵢ² and δΣ_n with ∓δXᵢ (− for body 1).
+    """
+    nu = X_i * X_j
+    # coefficient of (n̂·χᵢ) in δΣ_n: δ·(−X₁) for body 1, δ·(+X₂) for body 2; δ = X₁ − X₂
+    # For body i this is −(Xᵢ − Xⱼ)Xᵢ in both cases.
+    dsig = -(X_i - X_j) * X_i
+    a = (7.0 * X_i ** 2 + 3.0 * dsig,
+         (-10.0 - 29.0 * nu / 3.0) * X_i ** 2 + (-6.0 - 4.5 * nu) * dsig,
+         (1.5 + 59.0 * nu / 4.0 + 52.0 * nu ** 2 / 9.0) * X_i ** 2 + (1.5 + 73.0 * nu / 8.0 + 17.0 * nu ** 2 / 6.0) * dsig)
+    g2 = 1.0 - nu / 3.0
+    g4 = 1.0 - 65.0 * nu / 12.0
+    return a[0], a[1] + g2 * a[0], a[2] + g2 * a[1] + g4 * a[0]
 
 
 def angular_momentum_coefficients(nu):

@@ -36,6 +36,14 @@ Equations (units G = c = M = 1, t in units of M)
 
 * Phase: Φ̇ = v³ − |Ω_ℓ,LO|²/(4v³) (the shift only if ``p[P_SHIFT]`` = 1; arXiv:1507.00406).
 
+A third right-hand side, :func:`rhs_precessing_instantaneous`, integrates the *instantaneous*
+(not orbit-averaged) precession literally as Bohé et al. 2013 write it: the full orbital rotor R with
+Ω = v³ ℓ̂ + ϖ n̂, ϖ from their Eqs. (4.3)–(4.4) (spin-orbit, LO–NNLO), and the spins with the
+n̂-dependent 2PN (Kidder 1995 Eq. (2.4), Racine 2008 Eq. (2.7)) and 3PN (Bohé+ 2015 Eq. (A.2))
+spin-spin terms — the model of PostNewtonian.jl, plus the 3PN spin-spin precession.  No spin-spin
+part of ϖ is included (not available to us), and v̇ still uses the orbit-averaged energy and flux.
+It exists to measure the difference between the two conventions (tests); it must resolve every orbit.
+
 Events (all terminal), filled by :func:`events_precessing` / :func:`events_aligned`:
   0: v − v_end (requested end frequency, or v_max);   1: Ê′ (E′ = −νvÊ′ ≥ 0 ⇔ Ê′ ≤ 0);
   2: N·D (sign of v̇);   3, 4: (1 + SPIN_TOL) − |χᵢ|²;
@@ -95,7 +103,13 @@ P_DEN_LEN = 30
 P_EP_LEN = 31
 P_SPINTOL = 32   # |χ|² may exceed 1 by this much before event 3/4 fires
 P_DEN_EPS = 33   # event 5 fires when the denominator D of v̇ falls to this value
-P_SERIES = 40
+# instantaneous precession (rhs_precessing_instantaneous only)
+P_VARPI1 = 34    # w₀, w₂, w₄ of ϖ for body 1 (zeroed when truncated)
+P_VARPI2 = 37    # ... body 2
+P_ISS1 = 40      # body 1: 2PN a_j, a_jn, a_in; 3PN b_j, b_jn, b_jλ, b_in, b_iλ (zeroed when truncated)
+P_ISS2 = 48      # ... body 2
+P_OMEGA_L = 56   # 0: Ω_ℓ from −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| (LALSuite); 1: its spin-orbit part from ⟨ϖ n̂⟩ (Bohé+ 2013)
+P_SERIES = 64
 SERIES_SIZE = NK * NB * NL
 P_NUM = P_SERIES
 P_DEN = P_NUM + SERIES_SIZE
@@ -181,16 +195,27 @@ def rhs_precessing(t, y, p, dydt):
     d2y = o2z * c2x - o2x * c2z
     d2z = o2x * c2y - o2y * c2x
 
-    # Ω_ℓ = −ℓ̂ × (X₁²χ̇₁ + X₂²χ̇₂) / |L|,  |L| = (ν/v)(1 + L₂v² + L₄v⁴)
+    # Ω_ℓ = −ℓ̂ × (X₁²χ̇₁ + X₂²χ̇₂) / |L| with |L| = (ν/v)(1 + L₂v² + L₄v⁴).  Its spin-orbit part is
+    # v⁶ Σᵢ uᵢ χᵢ⊥ with uᵢ = Xᵢ²(σ₀ + σ₂v² + σ₄v⁴)/(ν(1 + L₂v² + L₄v⁴)); with P_OMEGA_L = 1 that part
+    # is replaced by Bohé et al.'s ⟨ϖ n̂⟩, uᵢ = ½(w₀ + w₂v² + w₄v⁴) (precession.py).
     q1 = X1 * X1
     q2 = X2 * X2
-    sx = q1 * d1x + q2 * d2x
-    sy = q1 * d1y + q2 * d2y
-    sz = q1 * d1z + q2 * d2z
-    inv_L = v / (p[P_NU] * (1.0 + v2 * (p[P_L2] + v2 * p[P_L4])))
-    wx = -(ly * sz - lz * sy) * inv_L
-    wy = -(lz * sx - lx * sz) * inv_L
-    wz = -(lx * sy - ly * sx) * inv_L
+    ex1, ey1, ez1 = d1x - so1 * (ly * c1z - lz * c1y), d1y - so1 * (lz * c1x - lx * c1z), d1z - so1 * (lx * c1y - ly * c1x)
+    ex2, ey2, ez2 = d2x - so2 * (ly * c2z - lz * c2y), d2y - so2 * (lz * c2x - lx * c2z), d2z - so2 * (lx * c2y - ly * c2x)
+    sx = q1 * ex1 + q2 * ex2
+    sy = q1 * ey1 + q2 * ey2
+    sz = q1 * ez1 + q2 * ez2
+    lfac = 1.0 + v2 * (p[P_L2] + v2 * p[P_L4])
+    inv_L = v / (p[P_NU] * lfac)
+    if p[P_OMEGA_L] == 0.0:
+        u1 = q1 * so1 * inv_L / v6
+        u2 = q2 * so2 * inv_L / v6
+    else:
+        u1 = 0.5 * (p[P_VARPI1] + v2 * (p[P_VARPI1 + 1] + v2 * p[P_VARPI1 + 2]))
+        u2 = 0.5 * (p[P_VARPI2] + v2 * (p[P_VARPI2 + 1] + v2 * p[P_VARPI2 + 2]))
+    wx = -(ly * sz - lz * sy) * inv_L + v6 * (u1 * p1x + u2 * p2x)
+    wy = -(lz * sx - lx * sz) * inv_L + v6 * (u1 * p1y + u2 * p2y)
+    wz = -(lx * sy - ly * sx) * inv_L + v6 * (u1 * p1z + u2 * p2z)
 
     # Φ̇ = v³ − |Σ wᵢ χᵢ⊥|² v⁹ / 4   (only if P_SHIFT)
     phidot = v3
@@ -220,6 +245,77 @@ def rhs_precessing(t, y, p, dydt):
     dydt[5] = d2y
     dydt[6] = d2z
     dydt[Y_PHI] = phidot
+
+
+@njit(RHS_SIG, cache=True)
+def rhs_precessing_instantaneous(t, y, p, dydt):
+    """Right-hand side for [v, χ₁, χ₂, R, Φ] with the instantaneous precession (module docstring);
+    R is the full orbital-frame rotor: n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹."""
+    v = y[Y_V]
+    c1x, c1y, c1z = y[1], y[2], y[3]
+    c2x, c2y, c2z = y[4], y[5], y[6]
+    rw, rx, ry, rz = y[7], y[8], y[9], y[10]
+    m = rw * rw + rx * rx + ry * ry + rz * rz
+    c = 2.0 / m
+    # columns of the rotation matrix of R: n̂ = R x̂ R⁻¹, λ̂ = R ŷ R⁻¹, ℓ̂ = R ẑ R⁻¹
+    nx, ny, nz = 1.0 - c * (ry * ry + rz * rz), c * (rx * ry + rw * rz), c * (rx * rz - rw * ry)
+    mx, my, mz = c * (rx * ry - rw * rz), 1.0 - c * (rx * rx + rz * rz), c * (ry * rz + rw * rx)
+    lx, ly, lz = c * (rx * rz + rw * ry), c * (ry * rz - rw * rx), 1.0 - c * (rx * rx + ry * ry)
+
+    a1 = lx * c1x + ly * c1y + lz * c1z
+    a2 = lx * c2x + ly * c2y + lz * c2z
+    s12 = c1x * c2x + c1y * c2y + c1z * c2z
+    s11 = c1x * c1x + c1y * c1y + c1z * c1z
+    s22 = c2x * c2x + c2y * c2y + c2z * c2z
+    lnv = math.log(v)
+    num, den = _vdot_parts(p, v, lnv, a1, a2, s12, a1 * a2, s11, a1 * a1, s22, a2 * a2)
+    v2 = v * v
+    v3 = v2 * v
+    v5 = v3 * v2
+    v6 = v3 * v3
+    v8 = v6 * v2
+    dydt[Y_V] = p[P_VDOT0] * v6 * v3 * num / den
+
+    n1 = nx * c1x + ny * c1y + nz * c1z
+    n2 = nx * c2x + ny * c2y + nz * c2z
+    m1 = mx * c1x + my * c1y + mz * c1z
+    m2 = mx * c2x + my * c2y + mz * c2z
+
+    # Ω₁ = v⁵(σ…)ℓ̂ + v⁶[a_j χ₂ + a_jn (n̂·χ₂)n̂ + a_in (n̂·χ₁)n̂]
+    #      + v⁸[b_j χ₂ + b_jn (n̂·χ₂)n̂ + b_jλ (λ̂·χ₂)λ̂ + b_in (n̂·χ₁)n̂ + b_iλ (λ̂·χ₁)λ̂]
+    so1 = v5 * (p[P_SO1] + v2 * (p[P_SO1 + 1] + v2 * p[P_SO1 + 2]))
+    kj = v6 * p[P_ISS1] + v8 * p[P_ISS1 + 3]
+    kn = v6 * (p[P_ISS1 + 1] * n2 + p[P_ISS1 + 2] * n1) + v8 * (p[P_ISS1 + 4] * n2 + p[P_ISS1 + 6] * n1)
+    km = v8 * (p[P_ISS1 + 5] * m2 + p[P_ISS1 + 7] * m1)
+    o1x = so1 * lx + kj * c2x + kn * nx + km * mx
+    o1y = so1 * ly + kj * c2y + kn * ny + km * my
+    o1z = so1 * lz + kj * c2z + kn * nz + km * mz
+    so2 = v5 * (p[P_SO2] + v2 * (p[P_SO2 + 1] + v2 * p[P_SO2 + 2]))
+    kj = v6 * p[P_ISS2] + v8 * p[P_ISS2 + 3]
+    kn = v6 * (p[P_ISS2 + 1] * n1 + p[P_ISS2 + 2] * n2) + v8 * (p[P_ISS2 + 4] * n1 + p[P_ISS2 + 6] * n2)
+    km = v8 * (p[P_ISS2 + 5] * m1 + p[P_ISS2 + 7] * m2)
+    o2x = so2 * lx + kj * c1x + kn * nx + km * mx
+    o2y = so2 * ly + kj * c1y + kn * ny + km * my
+    o2z = so2 * lz + kj * c1z + kn * nz + km * mz
+
+    dydt[1] = o1y * c1z - o1z * c1y
+    dydt[2] = o1z * c1x - o1x * c1z
+    dydt[3] = o1x * c1y - o1y * c1x
+    dydt[4] = o2y * c2z - o2z * c2y
+    dydt[5] = o2z * c2x - o2x * c2z
+    dydt[6] = o2x * c2y - o2y * c2x
+
+    # Ω = v³ ℓ̂ + ϖ n̂,  ϖ = v⁶ Σᵢ wᵢ(v) (n̂·χᵢ)
+    varpi = v6 * ((p[P_VARPI1] + v2 * (p[P_VARPI1 + 1] + v2 * p[P_VARPI1 + 2])) * n1
+                  + (p[P_VARPI2] + v2 * (p[P_VARPI2 + 1] + v2 * p[P_VARPI2 + 2])) * n2)
+    wx = v3 * lx + varpi * nx
+    wy = v3 * ly + varpi * ny
+    wz = v3 * lz + varpi * nz
+    dydt[Y_R] = 0.5 * (-wx * rx - wy * ry - wz * rz)
+    dydt[Y_R + 1] = 0.5 * (wx * rw + wy * rz - wz * ry)
+    dydt[Y_R + 2] = 0.5 * (-wx * rz + wy * rw + wz * rx)
+    dydt[Y_R + 3] = 0.5 * (wx * ry - wy * rx + wz * rw)
+    dydt[Y_PHI] = v3
 
 
 @njit(EVENTS_SIG, cache=True)
@@ -301,7 +397,8 @@ def vdot_series(X1, approximant, kmax, kappa1=1.0, kappa2=1.0):
 
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
-                    rotor="coprecessing", phase_shift=False, aligned_basis=None, series=None):
+                    rotor="coprecessing", phase_shift=False, aligned_basis=None, series=None,
+                    omega_l="torque"):
     """Build the parameter vector p.
 
     ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
@@ -309,7 +406,8 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     precessing one.  ``series``: (N, D, Ê′) from :func:`vdot_series` if already computed.
     """
     from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms,
-                             spin_orbit_precession, spin_spin_precession_2pn, spin_spin_precession_3pn)
+                             spin_orbit_precession, spin_spin_precession_2pn, spin_spin_precession_3pn,
+                             spin_spin_precession_3pn_instantaneous, varpi_coefficients)
     from .series import fold_basis, last_nonzero_power
 
     X2 = 1.0 - X1
@@ -324,6 +422,9 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     p[P_ROTOR] = 1.0 if rotor == "orbital" else 0.0
     p[P_SHIFT] = 1.0 if phase_shift else 0.0
+    if omega_l not in ("torque", "varpi"):
+        raise ValueError(f"omega_l must be 'torque' or 'varpi', got {omega_l!r}")
+    p[P_OMEGA_L] = 1.0 if omega_l == "varpi" else 0.0
     p[P_W1], p[P_W2] = phase_shift_weights(X1, X2)
     inc = precession_terms(so_order, ss_order)
     for off, (Xi, Xj, ki) in ((P_SO1, (X1, X2, kappa1)), (P_SO2, (X2, X1, kappa2))):
@@ -336,6 +437,16 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
             p[off2:off2 + 3] = spin_spin_precession_2pn(Xi, Xj, ki)
         if inc["ss_3pn"]:
             p[off3:off3 + 3] = spin_spin_precession_3pn(Xi, Xj, ki)
+    for offw, offs, (Xi, Xj, ki) in ((P_VARPI1, P_ISS1, (X1, X2, kappa1)), (P_VARPI2, P_ISS2, (X2, X1, kappa2))):
+        w0, w2, w4 = varpi_coefficients(Xi, Xj)
+        p[offw] = w0 if inc["so_lo"] else 0.0
+        p[offw + 1] = w2 if inc["so_nlo"] else 0.0
+        p[offw + 2] = w4 if inc["so_nnlo"] else 0.0
+        if inc["ss_2pn"]:
+            # instantaneous Kidder/Racine: Ωᵢ ∋ v⁶[−Xⱼ²χⱼ + 3Xⱼ²(n̂·χⱼ)n̂ + 3νκᵢ(n̂·χᵢ)n̂]
+            p[offs:offs + 3] = (-Xj ** 2, 3.0 * Xj ** 2, 3.0 * nu * ki)
+        if inc["ss_3pn"]:
+            p[offs + 3:offs + 8] = spin_spin_precession_3pn_instantaneous(Xi, Xj, ki)
     L2, L4 = angular_momentum_coefficients(nu)
     p[P_L2] = L2 if inc["so_nlo"] else 0.0
     p[P_L4] = L4 if inc["so_nnlo"] else 0.0
