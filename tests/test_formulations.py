@@ -63,8 +63,8 @@ def test_generator_derivative_inverts_the_omega_of_logarithms(r, w):
     a = math.sin(th) ** 2 / th**2
     b = (th - math.sin(th) * math.cos(th)) / (2 * th**3) if th > 1e-4 else 1 / 3 - th**2 / 15
     omega = 2 * rdot + a * 2 * np.cross(r, rdot) + b * 4 * np.cross(r, np.cross(r, rdot))
-    # the map ω → ṙ is ill-conditioned like 1/sin θ towards θ = π
-    assert np.allclose(omega, w, rtol=0, atol=5e-15 / math.sin(th) ** 2)
+    # ṙ grows like 1/(π − θ) towards θ = π; rounding errors in ω grow with it
+    assert np.allclose(omega, w, rtol=0, atol=2e-15 * (1 + np.linalg.norm(rdot)) * (1 + th**2))
 
 
 @settings(max_examples=100, deadline=None)
@@ -139,9 +139,9 @@ def test_derivative_along_the_binary_equals_the_rate_of_the_exact_state(name, t)
 # --------------------------------------------------------------------------------------------------
 
 
-@settings(max_examples=100, deadline=None)
-@given(vec3.filter(lambda a: np.linalg.norm(a) > 1e-3), st.floats(0.0, math.pi - 1e-6))
-def test_generator_reset(axis, theta):
+@pytest.mark.parametrize("theta", [*np.linspace(0.0, math.pi - 1e-6, 29), math.pi / 2 - 1e-12, math.pi / 2 + 1e-12])
+def test_generator_reset(theta):
+    axis = np.array([0.3, -0.8, 0.52])
     r = theta * axis / np.linalg.norm(axis)
     y = r.copy()
     changed = F.generator_reset(0.0, y, np.zeros(0))
