@@ -73,10 +73,14 @@ def integrate_angular_velocity(omega, t_span, R0, formulation="rotor", method="D
           ``integrand``, ``angular_velocity`` and ``describe`` methods): cached right-hand sides,
           nothing compiled per process — the fast path;
         * a numba ``@njit`` function ``omega(t)`` returning three floats (an array or a tuple): the
-          right-hand side composing it with the formulation is compiled once per process (~0.2 s);
+          right-hand side composing it with the formulation is compiled once per process (~0.4 s),
+          then runs as fast as the cached path;
         * a plain Python callable ``omega(t)`` returning three floats: called from the compiled
-          integrator through numba's object mode, about 5 µs per evaluation instead of ~0.1 µs, i.e.
-          some 40× slower than the binary's cached path on the paper's problem (measured).
+          integrator through numba's object mode, 4–5 µs per evaluation instead of ~0.17 µs, i.e.
+          ~30× slower than the cached path on the paper's problem (measured).
+
+        For the generator and vector formulations, a user's ω is also called from Python once per
+        output interval, to make the rotor signs continuous (see :mod:`pnrotor.formulations`).
     t_span : (t0, t_end)
         Integration interval; t_end < t0 integrates backward.
     R0 : array_like (4,)
