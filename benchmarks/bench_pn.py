@@ -10,7 +10,9 @@ inspiral:
   included: unit conversion, setup, both integrations, sampling, rotor reconstruction).
 
 Timings are medians over interleaved rounds (LAL and pnrotor alternate case by case), which is robust on
-a shared machine.  Also reported: pnrotor with sampling='steps' (every accepted step, no dense output)
+a shared machine.  Each timing includes freeing that call's own output and nothing else (freeing a
+previous 30 MB BNS result can cost ~7 ms of system time on this machine, which would otherwise land on
+whichever call happens to drop it).  Also reported: pnrotor with sampling='steps' (every accepted step, no dense output)
 and its integration-only wall time, its accepted steps, and the samples.  Numba compile time is
 measured separately, in fresh processes with an empty NUMBA_CACHE_DIR (cold) and again with that
 cache filled (warm).
@@ -119,15 +121,20 @@ def main():
             for name in args.cases:
                 m1, m2, c1, c2, f = CASES[name]
                 r = runs[name]
+                # each timing includes freeing the output (LAL's SWIG series are destroyed when
+                # lal_call returns), so no run pays for the deallocation of another one
                 t = time.perf_counter()
                 lal_call(lal, ls, CASES[name], approx)
                 r["lal"].append(time.perf_counter() - t)
                 t = time.perf_counter()
                 e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling=DT, **orders)
+                integ = e.stats["wall_time_integrate_s"]
+                del e
                 r["ours"].append(time.perf_counter() - t)
-                r["integrate"].append(e.stats["wall_time_integrate_s"])
+                r["integrate"].append(integ)
                 t = time.perf_counter()
-                evolve(m1, m2, c1, c2, f, approximant=approx, sampling="steps", **orders)
+                e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling="steps", **orders)
+                del e
                 r["ours_steps"].append(time.perf_counter() - t)
         print(f"\nSpinTaylor{approx} vs pnrotor {approx}: Δt = 1/4096 s, median of {args.rounds} interleaved rounds (ms)")
         print(f"{'case':26s} {'samples':>8s} {'LAL':>8s} {'pnrotor':>8s} {'ratio':>6s} {'steps-mode':>10s} "

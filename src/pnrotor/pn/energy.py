@@ -35,6 +35,7 @@ this is the standard SpinTaylor model and the one LALSuite integrates.
 import math
 
 import numpy as np
+from numba import njit
 
 from .series import (B_A1, B_A1A1, B_A1A2, B_A2, B_A2A2, B_ONE, B_S11, B_S12, B_S22, new_series)
 
@@ -173,13 +174,12 @@ def energy_series(X1, kappa1=1.0, kappa2=1.0):
     return C
 
 
+@njit(cache=True)
 def energy_derivative_series(E):
     """Ê′ with E′ = dE/dv = −ν v Ê′, from Ê: d/dv[v^{k+2}(e + e_L ln v)] = v^{k+1}[(k+2)(e + e_L ln v) + e_L]."""
     D = np.empty_like(E)
-    kp2 = _KP2[:E.shape[0]]
-    D[:, :, 0] = 0.5 * (kp2 * E[:, :, 0] + E[:, :, 1])
-    D[:, :, 1] = 0.5 * kp2 * E[:, :, 1]
+    for k in range(E.shape[0]):
+        for b in range(E.shape[1]):
+            D[k, b, 0] = 0.5 * ((k + 2) * E[k, b, 0] + E[k, b, 1])
+            D[k, b, 1] = 0.5 * (k + 2) * E[k, b, 1]
     return D
-
-
-_KP2 = (np.arange(64) + 2.0)[:, None]

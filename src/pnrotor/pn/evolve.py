@@ -38,7 +38,7 @@ from ..ode.result import (STATUS_EVENT, contd8, STATUS_MAX_STEPS, STATUS_NONFINI
                           STATUS_SUCCESS)
 from . import initial as _ini
 from . import system as _sys
-from .series import (B_A1, B_A2, MAX_ORDER, basis_values, evaluate, fold_basis, kmax_from_orders)
+from .series import MAX_ORDER, basis_values, kmax_from_orders
 
 TERMINATION_MESSAGES = {
     "f_max": "v reached the requested end frequency f_max",
@@ -202,12 +202,14 @@ def _store_row(i, vv, ph, w, x, yy, z, v, Phi, R, ell):
 
 
 @njit(cache=True)
-def _fill_history(mode, seg_t, seg_h, coef, tq, Y, R0, ell0, c1, c2, offset, v, Phi, chi1, chi2, R, ell):
+def _fill_history(mode, seg_t, seg_h, coef, tq, reverse, Y, R0, ell0, c1, c2, offset, v, Phi, chi1, chi2, R,
+                  ell):
     """History rows offset, offset+1, … from states.
 
     The states are either the rows of Y (``tq`` empty) or the DOP853 interpolant (segments
-    ``seg_t``, ``seg_h``, ``coef``) at the times ``tq``, sorted along the direction of integration and
-    found by walking the segments once.  Per mode:
+    ``seg_t``, ``seg_h``, ``coef``) at the times ``tq``, found by walking the segments once: ``tq`` is
+    sorted along the direction of integration, or against it with ``reverse`` (then it is visited from
+    its end, so no reversed copy is needed; row offset + q still receives time tq[q]).  Per mode:
 
     * aligned: y = [v, Φ], R = R₀ exp(Φẑ/2), spins constant;
     * coprecessing: y = [v, χ₁, χ₂, R_p, Φ], R = R_p exp(Φẑ/2);
@@ -221,7 +223,8 @@ def _fill_history(mode, seg_t, seg_h, coef, tq, Y, R0, ell0, c1, c2, offset, v, 
     n = coef.shape[2] if dense else Y.shape[1]
     y = np.empty(n)
     j = 0
-    for q in range(nrow):
+    for qq in range(nrow):
+        q = nrow - 1 - qq if reverse else qq
         if dense:
             t = tq[q]
             while j + 1 < nseg and (t - seg_t[j + 1]) * seg_h[j + 1] >= 0.0:
@@ -415,14 +418,12 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     kmax = kmax_from_orders(pn_order, so_order, ss_order)
     a1, a2 = float(np.dot(ell, c1)), float(np.dot(ell, c2))
     bvals = basis_values(a1, a2, float(np.dot(c1, c2)), float(np.dot(c1, c1)), float(np.dot(c2, c2)))
-    N, D, Ep = _sys.vdot_series(X1, approximant, kmax, kappa1, kappa2)
-    p = _sys.make_parameters(X1, approximant, kmax, so_order=so_order, ss_order=ss_order, kappa1=kappa1,
-                             kappa2=kappa2, v_end=v_max, rotor=rotor, phase_shift=precession_phase_shift,
-                             aligned_basis=bvals if use_aligned else None, series=(N, D, Ep),
-                             omega_l="varpi" if precession == "averaged_varpi" else "torque")
+    p, (n0, d0, e0) = _sys.make_parameters(
+        X1, approximant, kmax, so_order=so_order, ss_order=ss_order, kappa1=kappa1, kappa2=kappa2, v_end=v_max,
+        rotor=rotor, phase_shift=precession_phase_shift, aligned_basis=bvals if use_aligned else None,
+        omega_l="varpi" if precession == "averaged_varpi" else "torque", basis=bvals, v_check=v0)
 
     # ---- validity at f_ref -------------------------------------------------------------------------
-    n0, d0, e0 = (float(evaluate(S, v0, bvals)) for S in (N, D, Ep))
     if not e0 > 0.0:
         raise ValueError(f"E'(v) >= 0 at f_ref (v = {v0:.4g}): the PN energy balance is invalid there")
     if not n0 * d0 > 0.0:
@@ -485,46 +486,41 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         hist = _allocate_history(t_out.size)
         off = 0
         for tp, Yp in parts:
-            _fill_history(out_mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, np.ascontiguousarray(Yp), R0c, ell, c1, c2,
-                          off, *hist)
+            _fill_history(out_mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, np.ascontiguousarray(Yp), R0c, ell,
+                          c1, c2, off, *hist)
             off += tp.size
     else:
         if mode == "dt":
             dt = sval / M_sec
             k_hi = math.floor(res_f.dense.t_max / dt * (1.0 + 1e-15))
-            tf = np.arange(0, k_hi + 1) * dt
-            tf = tf[tf <= res_f.dense.t_max]
+            while k_hi * dt > res_f.dense.t_max:
+                k_hi -= 1
+            k_lo = 0
             if res_b is not None:
                 k_lo = math.ceil(res_b.dense.t_max / dt * (1.0 + 1e-15))
-                tb = np.arange(-1, k_lo - 1, -1) * dt          # 0 > tb, along the backward direction
-                tb = tb[tb >= res_b.dense.t_max]
-            else:
-                tb = np.empty(0)
+                while k_lo * dt < res_b.dense.t_max:
+                    k_lo += 1
+            t_out = np.arange(k_lo, k_hi + 1, dtype=np.float64)
+            t_out *= dt                                   # one allocation: t = k Δt, ascending
+            nb = -k_lo
         else:  # per_orbit
             step = 2.0 * math.pi / sval
             phi_end = res_f.y[-1, phi_i]
-            targets_f = np.arange(0, math.floor(phi_end / step) + 1) * step
-            tf = _phase_times(res_f.dense, phi_i, v_i, targets_f)
+            tf = _phase_times(res_f.dense, phi_i, v_i, np.arange(0, math.floor(phi_end / step) + 1) * step)
             tf[0] = 0.0
             if res_b is not None:
                 phi_start = res_b.y[-1, phi_i]
-                targets_b = np.arange(-1, math.ceil(phi_start / step) - 1, -1) * step
-                tb = _phase_times(res_b.dense, phi_i, v_i, targets_b)
+                tb = _phase_times(res_b.dense, phi_i, v_i, np.arange(math.ceil(phi_start / step), 0) * step)
             else:
                 tb = np.empty(0)
-        t_out = np.concatenate((tb[::-1], tf))
+            t_out = np.concatenate((tb, tf))
+            nb = tb.size
         hist = _allocate_history(t_out.size)
-        if tb.size:
-            # backward samples are produced along the backward direction, then reversed in place
-            hb = _allocate_history(tb.size)
-            d = res_b.dense
-            _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, np.ascontiguousarray(tb), _NO_Y, R0c, ell, c1, c2, 0,
-                          *hb)
-            for dst, src in zip(hist, hb):
-                dst[:tb.size] = src[::-1]
+        if nb:
+            d = res_b.dense   # backward samples: visited from t = 0 downwards, the direction of integration
+            _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, t_out[:nb], True, _NO_Y, R0c, ell, c1, c2, 0, *hist)
         d = res_f.dense
-        _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, np.ascontiguousarray(tf), _NO_Y, R0c, ell, c1, c2,
-                      tb.size, *hist)
+        _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, t_out[nb:], False, _NO_Y, R0c, ell, c1, c2, nb, *hist)
     v, Phi, x1, x2, R, ellh = hist
 
     halves = {"forward": res_f, "backward": res_b}

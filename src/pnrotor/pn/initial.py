@@ -91,33 +91,46 @@ def newtonian_time_to_coalescence(v, nu):
     return 5.0 / (256.0 * nu * v ** 8)
 
 
+def _vec3(a, name):
+    """Three finite floats from a 3-vector (plain Python floats: cheaper than numpy for three numbers)."""
+    try:
+        x, y, z = (float(c) for c in a)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a 3-vector of numbers, got {a!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+        raise ValueError(f"{name} must be finite, got {a!r}")
+    return x, y, z
+
+
 def spin_vector(chi, name):
     """A dimensionless spin 3-vector, finite with |χ| ≤ 1."""
-    c = np.asarray(chi, dtype=np.float64)
-    if c.shape != (3,):
-        raise ValueError(f"{name} must be a 3-vector, got shape {c.shape}")
-    if not np.all(np.isfinite(c)):
-        raise ValueError(f"{name} must be finite, got {c}")
-    if float(c @ c) > 1.0 + 1e-14:
-        raise ValueError(f"|{name}| = {math.sqrt(float(c @ c))!r} exceeds 1")
-    return c.copy()
+    if np.ndim(chi) != 1:
+        raise ValueError(f"{name} must be a 3-vector, got shape {np.shape(chi)}")
+    x, y, z = _vec3(chi, name)
+    m2 = x * x + y * y + z * z
+    if m2 > 1.0 + 1e-14:
+        raise ValueError(f"|{name}| = {math.sqrt(m2)!r} exceeds 1")
+    return np.array([x, y, z])
 
 
 def orthonormal_frame(ell_hat, n_hat, tol=1e-8):
     """(ℓ̂, n̂) checked to be unit and orthogonal within ``tol`` and then made exactly so."""
-    ell = np.asarray(ell_hat, dtype=np.float64)
-    n = np.asarray(n_hat, dtype=np.float64)
-    for name, a in (("ell_hat", ell), ("n_hat", n)):
-        if a.shape != (3,) or not np.all(np.isfinite(a)):
+    vecs = []
+    for name, a in (("ell_hat", ell_hat), ("n_hat", n_hat)):
+        if np.ndim(a) != 1:
             raise ValueError(f"{name} must be a finite 3-vector, got {a!r}")
-        if abs(math.sqrt(float(a @ a)) - 1.0) > tol:
-            raise ValueError(f"{name} must be a unit vector (|{name}| = {math.sqrt(float(a @ a))!r})")
-    if abs(float(ell @ n)) > tol:
-        raise ValueError(f"n_hat must be orthogonal to ell_hat (n̂·ℓ̂ = {float(ell @ n)!r})")
-    ell = ell / math.sqrt(float(ell @ ell))
-    n = n - float(n @ ell) * ell
-    n = n / math.sqrt(float(n @ n))
-    return ell, n
+        x, y, z = _vec3(a, name)
+        norm = math.sqrt(x * x + y * y + z * z)
+        if abs(norm - 1.0) > tol:
+            raise ValueError(f"{name} must be a unit vector (|{name}| = {norm!r})")
+        vecs.append((x / norm, y / norm, z / norm))
+    (lx, ly, lz), (nx, ny, nz) = vecs
+    dot = lx * nx + ly * ny + lz * nz
+    if abs(dot) > tol:
+        raise ValueError(f"n_hat must be orthogonal to ell_hat (n̂·ℓ̂ = {dot!r})")
+    nx, ny, nz = nx - dot * lx, ny - dot * ly, nz - dot * lz
+    norm = math.sqrt(nx * nx + ny * ny + nz * nz)
+    return np.array([lx, ly, lz]), np.array([nx / norm, ny / norm, nz / norm])
 
 
 def frame_rotor(ell, n):

@@ -157,6 +157,43 @@ def divide(N, D, kmax):
     return Q
 
 
+@njit(cache=True)
+def eval_at(C, v, basis):
+    """Σ_k v^k Σ_b B_b (C[k,b,0] + C[k,b,1] ln v) at one v (numba; see :func:`evaluate`)."""
+    lnv = math.log(v)
+    acc = 0.0
+    for k in range(C.shape[0] - 1, -1, -1):
+        ck = 0.0
+        for b in range(C.shape[1]):
+            ck += basis[b] * (C[k, b, 0] + C[k, b, 1] * lnv)
+        acc = acc * v + ck
+    return acc
+
+
+@njit(cache=True)
+def fold_and_store(C, basis, fold, p, off):
+    """Write C (optionally contracted with the fixed invariants ``basis`` into column b = 0, see
+    :func:`fold_basis`) flat into p[off:] and return 1 + its highest nonzero power of v."""
+    n = 0
+    for k in range(C.shape[0]):
+        nonzero = False
+        for b in range(C.shape[1]):
+            for l in range(C.shape[2]):
+                if fold:
+                    val = 0.0
+                    if b == 0:
+                        for bb in range(C.shape[1]):
+                            val += basis[bb] * C[k, bb, l]
+                else:
+                    val = C[k, b, l]
+                p[off + (k * C.shape[1] + b) * C.shape[2] + l] = val
+                if val != 0.0:
+                    nonzero = True
+        if nonzero:
+            n = k + 1
+    return n
+
+
 def fold_basis(C, basis_values):
     """Contract the spin basis with fixed invariant values: returns C' with only b = 0 nonzero.
 

@@ -59,7 +59,9 @@ import numpy as np
 from numba import njit
 
 from ..ode import EVENTS_SIG, RHS_SIG
-from .series import NB, NK, NL, eval_series, eval_series0
+from .energy import energy_derivative_series
+from .series import (NB, NK, NL, divide, eval_at, eval_series, eval_series0, fold_and_store,
+                     truncate)
 
 # ---------------------------------------------------------------------------------------------------
 # state layout
@@ -378,37 +380,53 @@ APPROXIMANTS = ("T1", "T4", "T5")
 
 def vdot_series(X1, approximant, kmax, kappa1=1.0, kappa2=1.0):
     """(N, D, Ê′) series of v̇ = (32ν/5) v⁹ N/D for the approximant, truncated by ``kmax``."""
-    from .energy import energy_derivative_series, energy_series
+    from .energy import energy_series
     from .flux import flux_series
-    from .series import divide, new_series, truncate
 
-    E = truncate(energy_series(X1, kappa1, kappa2), kmax)
+    if approximant not in APPROXIMANTS:
+        raise ValueError(f"approximant must be one of {APPROXIMANTS}, got {approximant!r}")
+    return _vdot_series(energy_series(X1, kappa1, kappa2), flux_series(X1, kappa1, kappa2), kmax,
+                        APPROXIMANTS.index(approximant))
+
+
+@njit(cache=True)
+def _vdot_series(E_raw, F_raw, kmax, approx):
+    """(N, D, Ê′) from the untruncated Ê and F̂; approx 0, 1, 2 = T1, T4, T5 (module docstring)."""
+    E = truncate(E_raw.copy(), kmax)
     Ep = energy_derivative_series(E)   # the derivative keeps the powers of v, so it stays truncated
-    F = truncate(flux_series(X1, kappa1, kappa2), kmax)
-    one = new_series()
+    F = truncate(F_raw.copy(), kmax)
+    one = np.zeros_like(E)
     one[0, 0, 0] = 1.0
-    if approximant == "T1":
-        return F, Ep, Ep
-    if approximant == "T4":
+    if approx == 0:
+        return F, Ep, Ep.copy()
+    if approx == 1:
         return divide(F, Ep, kmax), one, Ep
-    if approximant == "T5":
-        return one, divide(Ep, F, kmax), Ep
-    raise ValueError(f"approximant must be one of {APPROXIMANTS}, got {approximant!r}")
+    return one, divide(Ep, F, kmax), Ep
+
+
+@njit(cache=True)
+def _store_series(N, D, Ep, basis, fold, p, v0):
+    """Store N, D, Ê′ (folded for the aligned RHS) and their lengths in p; return N, D, Ê′ at v0."""
+    p[P_NUM_LEN] = fold_and_store(N, basis, fold, p, P_NUM)
+    p[P_DEN_LEN] = fold_and_store(D, basis, fold, p, P_DEN)
+    p[P_EP_LEN] = fold_and_store(Ep, basis, fold, p, P_EP)
+    return eval_at(N, v0, basis), eval_at(D, v0, basis), eval_at(Ep, v0, basis)
 
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
                     rotor="coprecessing", phase_shift=False, aligned_basis=None, series=None,
-                    omega_l="torque"):
+                    omega_l="torque", basis=None, v_check=None):
     """Build the parameter vector p.
 
     ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
     invariants for the aligned/nonspinning right-hand side (folded into the series), or None for the
     precessing one.  ``series``: (N, D, Ê′) from :func:`vdot_series` if already computed.
+    With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′) at v_check)
+    instead of p, for checking the initial point.
     """
     from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms,
                              spin_orbit_precession, spin_spin_precession_2pn, spin_spin_precession_3pn,
                              spin_spin_precession_3pn_instantaneous, varpi_coefficients)
-    from .series import fold_basis, last_nonzero_power
 
     X2 = 1.0 - X1
     nu = X1 * X2
@@ -454,12 +472,10 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     p[P_DEN_EPS] = DEN_EPS
 
     N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2) if series is None else series
-    if aligned_basis is not None:
-        N, D, Ep = (fold_basis(S, aligned_basis) for S in (N, D, Ep))
-    p[P_NUM:P_NUM + SERIES_SIZE] = N.ravel()
-    p[P_DEN:P_DEN + SERIES_SIZE] = D.ravel()
-    p[P_EP:P_EP + SERIES_SIZE] = Ep.ravel()
-    p[P_NUM_LEN] = last_nonzero_power(N)
-    p[P_DEN_LEN] = last_nonzero_power(D)
-    p[P_EP_LEN] = last_nonzero_power(Ep)
-    return p
+    fold = aligned_basis is not None
+    b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
+    at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
+    return p if v_check is None else (p, at_v)
+
+
+_UNIT_BASIS = np.array([1.0, 0, 0, 0, 0, 0, 0, 0, 0])
