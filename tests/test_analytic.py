@@ -16,7 +16,8 @@ from hypothesis import strategies as st
 from pnrotor import quaternion as quat
 from pnrotor.analytic import PrecessingNutatingBinary, cos_sin
 
-mp.mp.dps = 40
+DIGITS = mp.workdps(40)
+"""Working precision of the reference (a decorator, so other test modules keep mpmath's default)."""
 
 # times up to the paper's T = 10⁶, including whole numbers of orbits and precession cycles
 TIMES = [0.0, 1.0, 999.9, 1e5 + 0.3, 3.3e5, 7.6e5, 7.77e5, 999_999.99, 1e6, -2.5e5]
@@ -40,8 +41,8 @@ def _exp_axis(half_angle, axis):
 
 
 def mp_factors(binary, t):
-    """The eight factors of eq:BinaryRotor and their time derivatives, in mpmath, from the float64
-    parameter values taken exactly."""
+    """The eight factors of eq:BinaryRotor and their time derivatives, in mpmath at the working
+    precision, from the float64 parameter values taken exactly."""
     t = mp.mpf(t)
     Oo, Op, a, ad, nu = (mp.mpf(x) for x in (binary.Omega_orb, binary.Omega_prec, binary.alpha,
                                              binary.alpha_dot, binary.nu))
@@ -66,6 +67,7 @@ def _product(factors):
     return R
 
 
+@DIGITS
 def mp_rotor_and_omega(binary, t):
     factors = mp_factors(binary, t)
     R = _product(factors)
@@ -103,6 +105,7 @@ def test_rotor_and_omega_match_mpmath_at_the_paper_parameters(t):
     assert np.max(np.abs(b.angular_velocity(t) - w_ref)) <= 1e-17  # |ω| ≈ 6e-3: ~2e-15 relative
 
 
+@DIGITS
 def test_reference_is_accurate_where_plain_float64_phases_are_not():
     # at t ≈ 10⁶ the float64 product Ω_orb·t alone is off by up to 4.5e-13 rad; the reference is not
     b = PrecessingNutatingBinary()
@@ -131,6 +134,7 @@ def test_rotor_and_omega_match_mpmath_for_any_parameters(Omega_orb, Omega_prec, 
     assert np.max(np.abs(b.angular_velocity(t) - w_ref)) <= 2e-15 * scale
 
 
+@DIGITS
 def test_mpmath_reference_derivative_agrees_with_numerical_differentiation():
     # guards the reference itself: its product-rule Ṙ equals mpmath's numerical derivative of R
     b = PrecessingNutatingBinary()
@@ -147,6 +151,7 @@ def test_mpmath_reference_derivative_agrees_with_numerical_differentiation():
 
 
 @pytest.mark.parametrize("t", [0.5, 1e6 + 0.25, 2.5e8, 3e8, 1e9 + 0.5, -7e9])  # both reductions (k < 2^20, ≥ 2^20)
+@DIGITS
 def test_cos_sin_is_exactly_reduced_for_large_arguments(t):
     c0, rate = 0.3, 2 * math.pi / 1000
     theta = mp.mpf(c0) + mp.mpf(rate) * mp.mpf(t)
