@@ -248,3 +248,25 @@ def test_instantaneous_precession_is_the_averaged_one_plus_nutation():
     measured = _angle(a.ell_hat[:2000], b.ell_hat[:2000]).max()
     assert 0.7 * predicted < measured < 1.3 * predicted
     assert np.max(np.abs(np.linalg.norm(b.chi1, axis=1) - np.linalg.norm(args[2]))) < 1e-10
+
+
+def test_output_kernel_matches_the_integrators_dense_output():
+    """The sampling kernel's dense evaluation equals pnrotor.ode's DenseOutput at the same times."""
+    import sys
+    from pnrotor.ode import dop853
+    from pnrotor.pn import system
+    from pnrotor.pn.series import kmax_from_orders
+    ev = sys.modules["pnrotor.pn.evolve"]
+    p = system.make_parameters(0.75, "T4", kmax_from_orders(3.5, 3, 3), so_order=3.0, ss_order=3.0)
+    y0 = np.concatenate(([0.25], [0.5, 0.1, 0.3], [0.0, 0.4, -0.2], [1.0, 0.0, 0.0, 0.0], [0.0]))
+    r = dop853(system.rhs_precessing, 0.0, y0, 3000.0, 1e-12, args=p, dense=True)
+    tq = np.linspace(0.0, 3000.0, 777)
+    hist = ev._allocate_history(tq.size)
+    ev._fill_history(ev.MODE_ORBITAL, r.dense.seg_t, r.dense.seg_h, r.dense.coef, tq, False, ev._NO_Y,
+                     np.array([1.0, 0, 0, 0]), Z, np.zeros(3), np.zeros(3), 0, *hist)
+    Y = r.dense(tq)
+    # equal up to the rounding of fused multiply-adds (the ODE kernel contracts, ours need not)
+    np.testing.assert_allclose(hist[0], Y[:, 0], rtol=1e-15, atol=0)
+    np.testing.assert_allclose(hist[1], Y[:, 11], rtol=1e-15, atol=1e-15)
+    np.testing.assert_allclose(hist[2], Y[:, 1:4], rtol=1e-14, atol=1e-16)
+    np.testing.assert_allclose(hist[4], Y[:, 7:11] / np.linalg.norm(Y[:, 7:11], axis=1)[:, None], rtol=0, atol=2e-16)

@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 
 from ..ode import dop853
-from ..ode.result import (STATUS_EVENT, contd8, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
+from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
 from . import initial as _ini
 from . import system as _sys
@@ -183,6 +183,19 @@ MODE_ALIGNED, MODE_COPRECESSING, MODE_ORBITAL = 0, 1, 2
 
 
 @njit(cache=True, inline="always")
+def _contd8_segment(coef, j, theta, out):
+    """DOP853 dense output of segment j at θ into out: the same polynomial as
+    :func:`pnrotor.ode.result.contd8` (Hairer's ``contd8``, r₁ + θ(r₂ + θ'(r₃ + θ(r₄ + θ'(r₅ + θ(r₆ +
+    θ'(r₇ + θ r₈))))))), θ' = 1 − θ), indexing coef[j] in place: slicing coef[j] for each sample
+    costs more than the polynomial for small states (2.4× for [v, Φ]).  Checked against
+    ``DenseOutput`` in the tests."""
+    th1 = 1.0 - theta
+    for i in range(out.size):
+        out[i] = coef[j, 0, i] + theta * (coef[j, 1, i] + th1 * (coef[j, 2, i] + theta * (coef[j, 3, i] + th1 * (
+            coef[j, 4, i] + theta * (coef[j, 5, i] + th1 * (coef[j, 6, i] + theta * coef[j, 7, i]))))))
+
+
+@njit(cache=True, inline="always")
 def _store_row(i, vv, ph, w, x, yy, z, v, Phi, R, ell):
     """Normalize R = (w, x, y, z) and store v, Φ, R and ℓ̂ = R ẑ R⁻¹ in row i."""
     inv = 1.0 / math.sqrt(w * w + x * x + yy * yy + z * z)
@@ -229,7 +242,7 @@ def _fill_history(mode, seg_t, seg_h, coef, tq, reverse, Y, R0, ell0, c1, c2, of
             t = tq[q]
             while j + 1 < nseg and (t - seg_t[j + 1]) * seg_h[j + 1] >= 0.0:
                 j += 1
-            contd8(coef[j], (t - seg_t[j]) / seg_h[j], y)
+            _contd8_segment(coef, j, (t - seg_t[j]) / seg_h[j], y)
         else:
             for k in range(n):
                 y[k] = Y[q, k]
