@@ -6,7 +6,8 @@ One run:
    Φ(0) = 0, n̂(0) = ``n_hat``, ℓ̂(0) = ``ell_hat``;
 2. choose the right-hand side: :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) for nonspinning
    and aligned-spin binaries, :func:`~pnrotor.pn.system.rhs_precessing` (state
-   [v, χ₁, χ₂, R, Φ]) otherwise or when ``integrate_rotor=True``;
+   [v, χ₁, χ₂, R, Φ]) otherwise or when ``integrate_rotor=True`` (or
+   :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with ``precession='instantaneous'``);
 3. integrate with DOP853 backward to f_min (if given) and forward to f_max or to termination, each
    with terminal events; both halves share t = 0 and are stitched into one history;
 4. sample from the integrator's steps or its 7th-order dense output (never by shortening steps).
@@ -22,8 +23,8 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
   ``'energy_balance'``);
 * ``'spin_magnitude'`` — |χᵢ| exceeded 1 (by more than 1e-10 in |χ|²);
 * ``'nonfinite'``, ``'max_steps'``, ``'step_underflow'`` — integrator failures;
-* ``'time_limit'`` — the generous time bound was reached (should not happen);
-* ``'final'`` — only with ``f_max``/``f_min`` None and a zero-length half (not integrated).
+* ``'time_limit'`` — the generous time bound (4τ_N + 10⁴ M forward) was reached (should not happen);
+* ``'not_integrated'`` — backward half only, when no f_min was given.
 """
 
 import math
