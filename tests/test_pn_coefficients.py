@@ -293,3 +293,28 @@ def test_instantaneous_precession_averages_to_averaged_model():
     system.rhs_precessing(0.0, ya, p_so, ds)
     om_so = _omega_from_rdot(R0, ds[7:11])
     np.testing.assert_allclose(om - v ** 3 * ell, om_so, rtol=1e-12, atol=1e-18)
+
+
+@pytest.mark.parametrize("nu", [0.25, 0.1, 0.01])
+def test_4pn_energy_matches_lalsuite_closed_form(nu):
+    """Our 4PN binding-energy coefficient (Blanchet 2014 Eq. (233)) vs LALSuite's
+    XLALSimInspiralPNEnergy_8PNCoeff / _8PNLogCoeff (arXiv:1305.4884; an independent transcription)."""
+    e, elog = energy.nonspinning_energy_coefficients(nu)
+    pi2 = math.pi ** 2
+    lal = (-39.69 / 1.28 + (-123.671 / 5.76 + 9.037 / 1.536 * pi2 + 1792.0 / 15.0 * math.log(2) + 89.6 / 1.5 * GAMMA) * nu
+           + (-498.449 / 3.456 + 31.57 / 5.76 * pi2) * nu ** 2 + 3.01 / 17.28 * nu ** 3 + 7.7 / 3110.4 * nu ** 4)
+    assert e[8] == pytest.approx(lal, rel=1e-13)
+    assert elog[8] == pytest.approx(896.0 / 15.0 * nu, rel=1e-15)
+
+
+def test_test_mass_flux_matches_tagoshi_sasaki():
+    """ν → 0 limit of the 4PN and 4.5PN flux: the black-hole-perturbation coefficients of Tagoshi &
+    Sasaki 1994 (Prog. Theor. Phys. 92, 745), written with ln x = 2 ln v (the numbers as recalled from
+    that paper, an independent check of the ν⁰ part of our transcription of arXiv:2304.11186)."""
+    f, flog = flux.nonspinning_flux_coefficients(0.0)
+    ln2, ln3 = math.log(2), math.log(3)
+    assert f[8] == pytest.approx(-323105549467 / 3178375200 + 232597 * GAMMA / 4410 - 1369 * math.pi ** 2 / 126
+                                 + 39931 * ln2 / 294 - 47385 * ln3 / 1568, rel=1e-13)
+    assert flog[8] == pytest.approx(232597 / 4410, rel=1e-15)
+    assert f[9] == pytest.approx(math.pi * (265978667519 / 745113600 - 6848 * GAMMA / 105 - 13696 * ln2 / 105), rel=1e-13)
+    assert flog[9] == pytest.approx(-6848 * math.pi / 105, rel=1e-15)
