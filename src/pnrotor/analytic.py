@@ -110,8 +110,9 @@ def _cos_sin_poly(x):
 @njit(cache=True)
 def cos_sin(c, rate, t):
     """(cos θ, sin θ) of the real number θ = c + rate·t (for the float64 values given), to ~1e-16 for
-    any t: θ is formed exactly as a sum of two doubles, reduced modulo π/2 against a two-double π/2,
-    and the polynomials are evaluated on the remainder x ∈ [−π/4, π/4] (see the module docstring)."""
+    |θ| up to ~1e15 (beyond, the two-double π/2 runs out of digits): θ is formed exactly as a sum of
+    two doubles, reduced modulo π/2, and the polynomials are evaluated on the remainder
+    x ∈ [−π/4, π/4] (see the module docstring)."""
     p, e = _two_prod(rate, t)
     s, e2 = _two_sum(c, p)
     e += e2
