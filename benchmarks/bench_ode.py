@@ -35,19 +35,12 @@ from scipy.integrate import solve_ivp
 
 from pnrotor.ode import RHS_SIG, bulirsch_stoer, dop853
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+from ode_problems import kepler, kepler_exact  # noqa: E402  (the tests' problems, with exact answers)
+
 # --------------------------------------------------------------------------------------------------
 # problems
 # --------------------------------------------------------------------------------------------------
-
-
-@njit(RHS_SIG, cache=True)
-def kepler(t, y, p, dydt):
-    r2 = y[0] * y[0] + y[1] * y[1]
-    r3 = r2 * math.sqrt(r2)
-    dydt[0] = y[2]
-    dydt[1] = y[3]
-    dydt[2] = -y[0] / r3
-    dydt[3] = -y[1] / r3
 
 
 @njit(RHS_SIG, cache=True)
@@ -71,17 +64,6 @@ def pleiades(t, y, p, dydt):
             dydt[3 * nb + i] += (j + 1) * fy
             dydt[2 * nb + j] -= (i + 1) * fx
             dydt[3 * nb + j] -= (i + 1) * fy
-
-
-def kepler_exact(t, e):
-    t = np.atleast_1d(np.asarray(t, dtype=float))
-    M = np.mod(t, 2 * np.pi)
-    E = M + e * np.sin(M)
-    for _ in range(60):
-        E = E - (E - e * np.sin(E) - M) / (1 - e * np.cos(E))
-    Edot = 1.0 / (1 - e * np.cos(E))
-    b = np.sqrt(1 - e * e)
-    return np.stack([np.cos(E) - e, b * np.sin(E), -np.sin(E) * Edot, b * np.cos(E) * Edot], axis=-1)
 
 
 ECC = 0.6

@@ -5,89 +5,16 @@ harmonic oscillator, the first integral of the Lotka–Volterra system, and poly
 (which Gragg's rule with extrapolation integrates exactly).
 """
 
-import math
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from numba import njit
 from scipy.linalg import expm
 
-from pnrotor.ode import (AFTER_STEP_SIG, RHS_SIG, STATUS_MAX_STEPS, STATUS_NONFINITE,
-                         STATUS_SUCCESS, bulirsch_stoer)
+from pnrotor.ode import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_SUCCESS, bulirsch_stoer
 
-
-@njit(RHS_SIG, cache=True)
-def kepler(t, y, p, dydt):
-    r2 = y[0] * y[0] + y[1] * y[1]
-    r3 = r2 * math.sqrt(r2)
-    dydt[0] = y[2]
-    dydt[1] = y[3]
-    dydt[2] = -y[0] / r3
-    dydt[3] = -y[1] / r3
-
-
-@njit(RHS_SIG, cache=True)
-def oscillator(t, y, p, dydt):
-    dydt[0] = y[1]
-    dydt[1] = -p[0] * p[0] * y[0]
-
-
-@njit(RHS_SIG, cache=True)
-def linear(t, y, p, dydt):
-    n = y.size
-    for i in range(n):
-        s = 0.0
-        for j in range(n):
-            s += p[i * n + j] * y[j]
-        dydt[i] = s
-
-
-@njit(RHS_SIG, cache=True)
-def lotka_volterra(t, y, p, dydt):
-    dydt[0] = p[0] * y[0] - p[1] * y[0] * y[1]
-    dydt[1] = p[2] * y[0] * y[1] - p[3] * y[1]
-
-
-@njit(RHS_SIG, cache=True)
-def ramp(t, y, p, dydt):
-    dydt[0] = 1.0
-    dydt[1] = y[0]
-
-
-@njit(RHS_SIG, cache=True)
-def nan_always(t, y, p, dydt):
-    dydt[0] = math.nan
-
-
-@njit(RHS_SIG, cache=True)
-def blow_up(t, y, p, dydt):
-    dydt[0] = y[0] * y[0]
-
-
-@njit(AFTER_STEP_SIG, cache=True)
-def add_to_first(t, y, p):
-    y[0] += p[0]
-    return True
-
-
-def kepler_exact(t, e):
-    t = np.atleast_1d(np.asarray(t, dtype=float))
-    M = np.mod(t, 2 * np.pi)
-    E = M + e * np.sin(M)
-    for _ in range(60):
-        E = E - (E - e * np.sin(E) - M) / (1 - e * np.cos(E))
-    Edot = 1.0 / (1 - e * np.cos(E))
-    b = np.sqrt(1 - e * e)
-    return np.stack([np.cos(E) - e, b * np.sin(E), -np.sin(E) * Edot, b * np.cos(E) * Edot], axis=-1)
-
-
-def kepler_y0(e):
-    return np.array([1 - e, 0.0, 0.0, np.sqrt((1 + e) / (1 - e))])
-
-
-W = 2.0
+from ode_problems import (W, add_to_first, blow_up, kepler, kepler_exact, kepler_y0, linear, lotka_volterra,
+                          nan_always, oscillator, ramp)
 
 
 def test_kepler_error_falls_with_atol():

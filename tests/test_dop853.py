@@ -17,118 +17,12 @@ from numba import njit
 from scipy.integrate import DOP853, solve_ivp
 from scipy.linalg import expm
 
-from pnrotor.ode import (AFTER_STEP_SIG, EVENTS_SIG, RHS_SIG, STATUS_EVENT, STATUS_MAX_STEPS,
-                         STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_SUCCESS, DenseOutput,
-                         dop853, tableau)
+from pnrotor.ode import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
+                         STATUS_SUCCESS, DenseOutput, dop853, tableau)
 
-# --------------------------------------------------------------------------------------------------
-# right-hand sides, hooks and exact solutions
-# --------------------------------------------------------------------------------------------------
-
-
-@njit(RHS_SIG, cache=True)
-def kepler(t, y, p, dydt):
-    r2 = y[0] * y[0] + y[1] * y[1]
-    r3 = r2 * math.sqrt(r2)
-    dydt[0] = y[2]
-    dydt[1] = y[3]
-    dydt[2] = -y[0] / r3
-    dydt[3] = -y[1] / r3
-
-
-@njit(RHS_SIG, cache=True)
-def lotka_volterra(t, y, p, dydt):
-    dydt[0] = p[0] * y[0] - p[1] * y[0] * y[1]
-    dydt[1] = p[2] * y[0] * y[1] - p[3] * y[1]
-
-
-@njit(RHS_SIG, cache=True)
-def oscillator(t, y, p, dydt):
-    """y'' = −w² y with w = p[0]; solution y = cos(w t), y' = −w sin(w t) from (1, 0)."""
-    dydt[0] = y[1]
-    dydt[1] = -p[0] * p[0] * y[0]
-
-
-@njit(RHS_SIG, cache=True)
-def linear(t, y, p, dydt):
-    """y' = A y with A = p reshaped to (n, n), row-major."""
-    n = y.size
-    for i in range(n):
-        s = 0.0
-        for j in range(n):
-            s += p[i * n + j] * y[j]
-        dydt[i] = s
-
-
-@njit(RHS_SIG, cache=True)
-def ramp(t, y, p, dydt):
-    """y0' = 1, y1' = y0: polynomial solutions, integrated exactly by an order-8 method."""
-    dydt[0] = 1.0
-    dydt[1] = y[0]
-
-
-@njit(RHS_SIG, cache=True)
-def nan_after_one(t, y, p, dydt):
-    dydt[0] = 1.0 if t <= 1.0 else math.nan
-
-
-@njit(RHS_SIG, cache=True)
-def nan_always(t, y, p, dydt):
-    dydt[0] = math.nan
-
-
-@njit(RHS_SIG, cache=True)
-def blow_up(t, y, p, dydt):
-    """y' = y², y(0) = 1: y = 1/(1 − t) blows up at t = 1."""
-    dydt[0] = y[0] * y[0]
-
-
-@njit(AFTER_STEP_SIG, cache=True)
-def add_to_first(t, y, p):
-    """Add p[0] to y[0] after every accepted step."""
-    y[0] += p[0]
-    return True
-
-
-@njit(AFTER_STEP_SIG, cache=True)
-def never_modify(t, y, p):
-    return False
-
-
-@njit(EVENTS_SIG, cache=True)
-def osc_events(t, y, p, g):
-    g[0] = y[0] - 0.5   # position crosses 1/2
-    g[1] = y[1]         # velocity crosses 0 (it is exactly 0 at t0 = 0)
-
-
-@njit(EVENTS_SIG, cache=True)
-def two_close_levels(t, y, p, g):
-    g[0] = y[0] - 0.49
-    g[1] = y[0] - 0.5
-
-
-def kepler_exact(t, e):
-    """Kepler orbit with a = GM = 1 starting at pericentre: (x, y, vx, vy) at times t."""
-    t = np.atleast_1d(np.asarray(t, dtype=float))
-    M = np.mod(t, 2 * np.pi)
-    E = M + e * np.sin(M)
-    for _ in range(60):
-        E = E - (E - e * np.sin(E) - M) / (1 - e * np.cos(E))
-    Edot = 1.0 / (1 - e * np.cos(E))
-    b = np.sqrt(1 - e * e)
-    return np.stack([np.cos(E) - e, b * np.sin(E), -np.sin(E) * Edot, b * np.cos(E) * Edot], axis=-1)
-
-
-def kepler_y0(e):
-    return np.array([1 - e, 0.0, 0.0, np.sqrt((1 + e) / (1 - e))])
-
-
-W = 2.0
-
-
-def osc_exact(t):
-    t = np.asarray(t, dtype=float)
-    return np.stack([np.cos(W * t), -W * np.sin(W * t)], axis=-1)
+from ode_problems import (W, add_to_first, blow_up, kepler, kepler_exact, kepler_y0, linear, lotka_volterra,
+                          nan_after_one, nan_always, never_modify, osc_events, osc_exact, oscillator, ramp,
+                          two_close_levels)
 
 
 def scipy_fun(rhs, args):
