@@ -2,7 +2,12 @@
 
 __version__ = "0.1.0"
 
-_EXPORTS = {"integrate_angular_velocity": "pnrotor.integrate", "FrameHistory": "pnrotor.history"}
+_EXPORTS = {
+    "integrate_angular_velocity": "pnrotor.integrate",
+    "FrameHistory": "pnrotor.history",
+    "evolve": "pnrotor.pn.evolve",
+    "Evolution": "pnrotor.pn.evolve",
+}
 
 
 def __getattr__(name):

@@ -2,9 +2,9 @@
 
 One module per subcommand (`verify`, `bench`, `evolve`, `inspect`, `plot`), each with
 ``add_parser(subparsers)`` that registers its arguments and sets ``func`` to a ``run(args) -> int``.
-Errors in the user's input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``, or a
-`UsageError` raised by a subcommand) are printed as one line on stderr with exit status 2 and no
-traceback; Ctrl-C exits with 130.
+Errors in the user's input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``,
+``IsADirectoryError``, or a `UsageError` raised by a subcommand) are printed as one line on stderr with
+exit status 2 and no traceback; Ctrl-C exits with 130.
 """
 
 import argparse
@@ -28,13 +28,7 @@ def build_parser():
     parser.add_argument("--version", action="version", version=f"pnrotor {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in SUBCOMMANDS:
-        try:
-            module = importlib.import_module(f"pnrotor.cli.{name}")
-        except ModuleNotFoundError as error:
-            if error.name != f"pnrotor.cli.{name}":
-                raise
-            continue  # a subcommand not built yet
-        module.add_parser(subparsers)
+        importlib.import_module(f"pnrotor.cli.{name}").add_parser(subparsers)
     return parser
 
 
