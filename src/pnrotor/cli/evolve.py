@@ -26,7 +26,9 @@ The PN code (numba) is imported only when a run starts, so that the CLI starts q
 import contextlib
 import math
 import os
+import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -467,6 +469,41 @@ def attempt_chunk(chunk):
     return [(index, *attempt(params)) for index, params in chunk]
 
 
+class Stored:
+    """A run that a worker wrote into the part file `path` as group `group`, with the `brief` of it."""
+
+    def __init__(self, path, group, brief):
+        self.path, self.group, self.brief = path, group, brief
+
+
+def brief(run):
+    """What the batch summary needs of a run: small enough to send back from a worker instead of the run."""
+    return {"span": _span(run), "M_seconds": run.inputs["M_seconds"], "termination": run.termination,
+            "samples": len(run), "nfev": run.stats["nfev"], "wall_time_s": run.stats["wall_time_s"]}
+
+
+def write_chunk(chunk, folder, compression):
+    """`attempt` on each (index, params) of a chunk, the runs written into a part file in `folder` (group =
+    index) → [(index, ok, Stored or message)]. Encoding HDF5 costs several times a typical run, so the
+    workers do it and the parent only copies the groups into the batch file (HDF5's object copy)."""
+    path = Path(folder) / f"part-{chunk[0][0]}.h5"
+    writer = BatchWriter(path, compression)
+    results = []
+    try:
+        for index, params in chunk:
+            ok, result = attempt(params)
+            if ok:
+                writer.add(str(index), result)
+                result = Stored(path, str(index), brief(result))
+            results.append((index, ok, result))
+        if writer.count:
+            writer.commit(overwrite=True, durable=False)
+    except BaseException:
+        writer.discard()
+        raise
+    return results
+
+
 def _ignore_interrupts():
     import signal
 
@@ -489,36 +526,84 @@ def chunk_size(n_tasks, jobs):
     return max(1, min(8, n_tasks // (4 * jobs)))
 
 
-def results_pool(tasks, jobs, context="forkserver", chunksize=None):
-    """Yield (index, ok, result) for each (index, params), computed by `jobs` worker processes, as they finish.
-
-    The workers (started by `multiprocessing` context `context`) load the PN code once and take `chunksize`
-    rows per task. If this generator is closed early (Ctrl-C), queued tasks are cancelled and the workers
-    are stopped."""
+def start_method():
+    """How worker processes start: 'fork' on Linux when this process runs no other thread (a worker then
+    starts in ~0.02 s with the PN code already loaded, against ~0.6 s for 'forkserver' and ~0.8 s for
+    'spawn', benchmarks/bench_batch.py); otherwise 'forkserver' (forking a process with threads can
+    deadlock the child), or 'spawn' where there is no forkserver (Windows)."""
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    import threading
+
+    methods = multiprocessing.get_all_start_methods()
+    if sys.platform.startswith("linux") and "fork" in methods and threading.active_count() == 1:
+        return "fork"
+    return "forkserver" if "forkserver" in methods else "spawn"
+
+
+def results_pool(tasks, jobs, context=None, chunksize=None, parts=None, compression=None):
+    """Start `jobs` worker processes on `tasks` [(index, params)] and return a generator of (index, ok, result),
+    in the order the chunks finish.
+
+    The workers (started by `multiprocessing` method `context`, default `start_method`) load the PN code once
+    and take `chunksize` rows per task. They send back each run, or with `parts` (a folder) write the runs
+    of each chunk to a part file there and send back a `Stored`; the part file is removed once its rows
+    have been consumed. Closing the generator early (Ctrl-C) cancels the queued tasks and stops the workers.
+    The workers are started here, before the caller starts any thread (a progress bar's)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
 
     size = chunksize or chunk_size(len(tasks), jobs)
     chunks = [tasks[i : i + size] for i in range(0, len(tasks), size)]
-    pool = ProcessPoolExecutor(max_workers=min(jobs, len(chunks)), mp_context=multiprocessing.get_context(context),
-                               initializer=_preload)
+    mp_context = multiprocessing.get_context(context or start_method())
+    if mp_context.get_start_method() == "forkserver":
+        mp_context.set_forkserver_preload(["pnrotor.pn.evolve"])  # loaded once, in the server
+    pool = ProcessPoolExecutor(max_workers=min(jobs, len(chunks)), mp_context=mp_context, initializer=_preload)
+    futures = {}
+    try:
+        for chunk in chunks:
+            if parts is None:
+                futures[pool.submit(attempt_chunk, chunk)] = chunk
+            else:
+                futures[pool.submit(write_chunk, chunk, parts, compression)] = chunk
+    except BrokenProcessPool:
+        pass  # a worker died at start-up: the chunks not submitted are reported below
+    except BaseException:
+        _stop(pool)
+        raise
+    unsubmitted = chunks[len(futures):]
+    return _pool_results(pool, futures, unsubmitted, parts)
+
+
+def _stop(pool):
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        process.terminate()
+    pool.shutdown(wait=True)
+
+
+def _pool_results(pool, futures, unsubmitted, parts):
+    from concurrent.futures import as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
     completed = False
     try:
-        futures = {pool.submit(attempt_chunk, chunk): chunk for chunk in chunks}
         for future in as_completed(futures):
             try:
                 results = future.result()
             except BrokenProcessPool as error:
                 results = [(index, False, f"worker process died ({error})") for index, _ in futures[future]]
             yield from results
+            if parts is not None:
+                (Path(parts) / f"part-{futures[future][0][0]}.h5").unlink(missing_ok=True)
+        for chunk in unsubmitted:
+            yield from ((index, False, "worker process died at start-up") for index, _ in chunk)
         completed = True
     finally:
-        if not completed:
-            pool.shutdown(wait=False, cancel_futures=True)
-            for process in list((getattr(pool, "_processes", None) or {}).values()):
-                process.terminate()
-        pool.shutdown(wait=True)
+        if completed:
+            pool.shutdown(wait=True)
+        else:
+            _stop(pool)
 
 
 def results_dask(tasks, address):
@@ -555,33 +640,53 @@ class BatchWriter:
         self.temporary = self.file = None
         self.count = 0
 
+    def _file(self):
+        if self.file is None:
+            import h5py
+
+            from pnrotor import hdf5
+
+            self.temporary = hdf5._temporary_beside(self.path)
+            self.file = h5py.File(self.temporary, "w")
+            hdf5._put_metadata(self.file, hdf5.BATCH)
+        return self.file
+
     def add(self, name, run):
+        """Write `run` as the group `name`."""
+        from pnrotor import hdf5
+
+        hdf5._check_name(name, "run name")
+        kind = hdf5._kind_of(run)
+        group = self._file().create_group(name)
+        hdf5._put_metadata(group, kind)
+        hdf5._put_fields(group, run, hdf5.UNITS.get(kind, {}), self.compression)
+        self.count += 1
+
+    def copy(self, name, stored):
+        """Copy the group of a `Stored` run (written by a worker with the same layout) as the group `name`."""
         import h5py
 
         from pnrotor import hdf5
 
         hdf5._check_name(name, "run name")
-        kind = hdf5._kind_of(run)
-        if self.file is None:
-            self.temporary = hdf5._temporary_beside(self.path)
-            self.file = h5py.File(self.temporary, "w")
-            hdf5._put_metadata(self.file, hdf5.BATCH)
-        group = self.file.create_group(name)
-        hdf5._put_metadata(group, kind)
-        hdf5._put_fields(group, run, hdf5.UNITS.get(kind, {}), self.compression)
+        with h5py.File(stored.path, "r") as source:
+            source.copy(source[stored.group], self._file(), name)
         self.count += 1
 
-    def commit(self, overwrite):
+    def commit(self, overwrite, durable=True):
+        """Close the file and rename it to `path` (fsynced unless not `durable`, for temporary parts)."""
         from pnrotor import hdf5
 
         self.file.close()
         self.file = None
-        hdf5._fsync(self.temporary)
+        if durable:
+            hdf5._fsync(self.temporary)
         if self.path.exists() and not overwrite:  # appeared while the batch ran
             raise FileExistsError(f"{self.path} exists; pass --overwrite to replace it")
         os.replace(self.temporary, self.path)
         self.temporary = None
-        hdf5._fsync(self.path.parent)
+        if durable:
+            hdf5._fsync(self.path.parent)
 
     def discard(self):
         if self.file is not None:
@@ -651,6 +756,7 @@ def _run_batch(args):
     rows = read_batch(args.batch, cli_defaults)
     path, default_folder = _output_path(args, Path(args.batch).stem)
     tasks = [(i, row.params) for i, row in enumerate(rows) if row.error is None]
+    parts = None
     if args.scheduler is not None:
         where = f"Dask scheduler {args.scheduler}"
         results = results_dask(tasks, args.scheduler)
@@ -659,13 +765,14 @@ def _run_batch(args):
         results = results_serial(tasks)
     else:
         where = f"{min(jobs, len(tasks))} worker processes"
-        results = results_pool(tasks, jobs)
+        if tasks and default_folder:
+            Path(DEFAULT_FOLDER).mkdir(exist_ok=True)
+        parts = tempfile.mkdtemp(prefix=f"{path.name}.", suffix=".pnrotor-tmp", dir=path.parent)
+        results = results_pool(tasks, jobs, parts=parts, compression=args.compression)
     if not args.quiet:
         bad = len(rows) - len(tasks)
         print(f"pnrotor evolve --batch {args.batch}: {len(rows)} binaries"
               + (f" ({bad} with bad values)" if bad else "") + f", on {where}")
-
-    from tqdm import tqdm
 
     writer = BatchWriter(path, args.compression)
     lines = {}
@@ -674,15 +781,19 @@ def _run_batch(args):
     try:
         if tasks and default_folder:
             Path(DEFAULT_FOLDER).mkdir(exist_ok=True)
-        with tqdm(total=len(tasks), unit="run", file=sys.stderr, disable=args.quiet or not sys.stderr.isatty(),
-                  desc="evolve") as bar:
+        with _progress_bar(len(tasks), enabled=not args.quiet and sys.stderr.isatty()) as bar:
             for index, ok, result in results:
                 interrupted.check()
                 row = rows[index]
                 if ok:
                     with interrupted.deferred():
-                        writer.add(row.name, result)
-                    evolve_seconds += result.stats["wall_time_s"]
+                        if isinstance(result, Stored):
+                            writer.copy(row.name, result)
+                            result = result.brief
+                        else:
+                            writer.add(row.name, result)
+                            result = brief(result)
+                    evolve_seconds += result["wall_time_s"]
                     lines[index] = _batch_line(row, result)
                 else:
                     row.error = result
@@ -696,6 +807,8 @@ def _run_batch(args):
         raise
     finally:
         results.close()  # stops the workers early after an error or Ctrl-C
+        if parts is not None:
+            shutil.rmtree(parts, ignore_errors=True)
         interrupted.restore()
     failed = [row for row in rows if row.error is not None]
     if not args.quiet:
@@ -709,8 +822,20 @@ def _run_batch(args):
     return 1 if failed else 0
 
 
-def _batch_line(row, run):
-    t0, t1, v0, v1, orbits, exact = _span(run)
-    return (f"  {row.label}  {row.name}: {(t1 - t0) * run.inputs['M_seconds']:.6g} s, "
-            f"{_orbits_text(orbits, exact)}, "
-            f"v {v0:.4g} -> {v1:.4g}, {run.termination}, {len(run)} samples, {run.stats['nfev']} evaluations")
+def _progress_bar(total, enabled):
+    """A tqdm bar on stderr, without tqdm's monitor thread (a thread would make later worker pools avoid
+    'fork'), or a stand-in that does nothing."""
+    if not enabled:
+        return contextlib.nullcontext(type("NoBar", (), {"update": lambda self, n=1: None})())
+    from tqdm import tqdm
+
+    class Bar(tqdm):
+        monitor_interval = 0
+
+    return Bar(total=total, unit="run", file=sys.stderr, desc="evolve")
+
+
+def _batch_line(row, brief):
+    t0, t1, v0, v1, orbits, exact = brief["span"]
+    return (f"  {row.label}  {row.name}: {(t1 - t0) * brief['M_seconds']:.6g} s, {_orbits_text(orbits, exact)}, "
+            f"v {v0:.4g} -> {v1:.4g}, {brief['termination']}, {brief['samples']} samples, {brief['nfev']} evaluations")

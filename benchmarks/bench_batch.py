@@ -1,0 +1,163 @@
+"""Benchmark of `pnrotor evolve --batch`: runs per second in this process and on a pool of local workers.
+
+Batches of N varied precessing binaries from 20 Hz (seeded; spins up to 0.9 in random directions),
+each evolved to the end of the inspiral:
+
+* ``bbh-steps``: total masses 8–80 M☉, mass ratio 1–8, every integrator step (~200 samples; ~0.5 ms
+  per run);
+* ``bbh-1/4096``: the same binaries sampled uniformly at 1/4096 s (~2·10⁴ samples per run: sampling and
+  sending the arrays back weigh in);
+* ``light-steps``: total masses 2.5–12 M☉ (BNS to NSBH), every step (10³–10⁴ steps: the integration
+  dominates).
+
+Each batch runs
+
+* serially, in this process (a loop over `pnrotor.cli.evolve.results_serial`, what ``--jobs 1`` does);
+* on a process pool of 1 and of 2 workers (`results_pool`, what ``--jobs N`` does) for each
+  `multiprocessing` start method, start-up of the workers included (a new pool per batch, as in the CLI);
+* end to end through the CLI, ``pnrotor evolve --batch FILE.csv --jobs 1`` and ``--jobs 2`` (in this
+  process: reading the CSV, evolving, writing the batch file), which shows what a user gets.
+
+Timings are medians over interleaved rounds (every configuration once per round), which is robust on a
+shared machine. Apart: the start-up of a pool alone (1 and 2 workers, until each has loaded the PN code
+and answered an empty task).
+
+    python benchmarks/bench_batch.py [--runs 40] [--rounds 5] [--contexts fork forkserver spawn]
+"""
+
+import argparse
+import contextlib
+import io
+import os
+import statistics
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from pnrotor.cli import main as cli_main
+from pnrotor.cli.evolve import results_pool, results_serial, start_method
+
+
+WORKLOADS = {"bbh-steps": (8.0, 80.0, "steps"), "bbh-1/4096": (8.0, 80.0, 1 / 4096),
+             "light-steps": (2.5, 12.0, "steps")}
+
+
+def binaries(n, m_low, m_high, sampling, seed=2016):
+    rng = np.random.default_rng(seed)
+    tasks = []
+    for i in range(n):
+        total, q = float(rng.uniform(m_low, m_high)), float(rng.uniform(1.0, 8.0))
+        m1 = total * q / (1 + q)
+        spins = []
+        for _ in range(2):
+            direction = rng.normal(size=3)
+            spins.append(tuple((rng.uniform(0.0, 0.9) * direction / np.linalg.norm(direction)).tolist()))
+        tasks.append((i, dict(m1=m1, m2=total - m1, chi1=spins[0], chi2=spins[1], f_ref=20.0, sampling=sampling)))
+    return tasks
+
+
+def write_csv(path, tasks):
+    with open(path, "w") as f:
+        f.write("m1,m2,chi1,chi2,f_ref,sampling\n")
+        for _, p in tasks:
+            sampling = p["sampling"] if isinstance(p["sampling"], str) else repr(p["sampling"])
+            f.write(f"{p['m1']!r},{p['m2']!r},\"{','.join(map(repr, p['chi1']))}\",\"{','.join(map(repr, p['chi2']))}\","
+                    f"{p['f_ref']!r},{sampling}\n")
+
+
+def time_cli(csv_path, jobs):
+    out = os.path.join(os.path.dirname(csv_path), "out.h5")
+    start = time.perf_counter()
+    with contextlib.redirect_stdout(io.StringIO()):
+        code = cli_main(["evolve", "--batch", csv_path, "--jobs", str(jobs), "-o", out, "--overwrite", "-q"])
+    elapsed = time.perf_counter() - start
+    assert code == 0
+    return elapsed
+
+
+def time_batch(tasks, mode, jobs=1, context=None):
+    start = time.perf_counter()
+    results = list(results_serial(tasks) if mode == "serial" else results_pool(tasks, jobs, context))
+    elapsed = time.perf_counter() - start
+    assert len(results) == len(tasks) and all(ok for _, ok, _ in results), [r for r in results if not r[1]][:1]
+    return elapsed, results
+
+
+def time_startup(jobs, context):
+    """Seconds from creating a pool of `jobs` workers until each has loaded the PN code and answered."""
+    start = time.perf_counter()
+    list(results_pool([(i, None) for i in range(jobs)], jobs, context, chunksize=1))
+    return time.perf_counter() - start
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=40)
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--contexts", nargs="+", default=["fork", "forkserver", "spawn"])
+    parser.add_argument("--workloads", nargs="+", default=list(WORKLOADS), choices=list(WORKLOADS))
+    args = parser.parse_args()
+    print(f"{os.cpu_count()} cores, Python {sys.version.split()[0]}; {args.runs} precessing binaries from 20 Hz per "
+          f"batch, {args.rounds} interleaved rounds, medians; CLI default start method: {start_method()}")
+
+    start = time.perf_counter()
+    import pnrotor.pn.evolve  # noqa: F401 - numba's cache, loaded once here
+
+    print(f"import of the PN code in this process: {time.perf_counter() - start:.2f} s")
+    configs = [("serial", 1, None)] + [("pool", jobs, c) for c in args.contexts for jobs in (1, 2)]
+    configs += [("cli", 1, None), ("cli", 2, None)]
+    folder = tempfile.mkdtemp(prefix="bench_batch_")
+    for workload in args.workloads:
+        m_low, m_high, sampling = WORKLOADS[workload]
+        tasks = binaries(args.runs, m_low, m_high, sampling)
+        csv_path = os.path.join(folder, "batch.csv")
+        write_csv(csv_path, tasks)
+        _, reference = time_batch(tasks[:2], "serial")  # first calls: type dispatch
+        _, reference = time_batch(tasks, "serial")
+        samples = sum(len(r) for _, _, r in reference)
+        evolve_s = sum(r.stats["wall_time_s"] for _, _, r in reference)
+        times = {config: [] for config in configs}
+        for _ in range(args.rounds):
+            for config in configs:
+                mode, jobs, context = config
+                if mode == "cli":
+                    times[config].append(time_cli(csv_path, jobs))
+                    continue
+                elapsed, results = time_batch(tasks, mode, jobs, context)
+                times[config].append(elapsed)
+                if mode == "pool":  # the same histories as in this process, bitwise
+                    got = {i: r for i, _, r in results}
+                    for i, _, r in reference:
+                        assert got[i].R.tobytes() == r.R.tobytes() and got[i].t.tobytes() == r.t.tobytes()
+        print(f"\n{workload}: {samples} samples in all ({samples / args.runs:.0f} per run), "
+              f"evolve's own wall time {evolve_s:.3f} s in all ({1e3 * evolve_s / args.runs:.2f} ms per run)")
+        serial = statistics.median(times[("serial", 1, None)])
+        print(f"  {'mode':<26} {'median s':>9} {'runs/s':>8} {'vs serial':>9}   (all rounds, s)")
+        for config in configs:
+            mode, jobs, context = config
+            median = statistics.median(times[config])
+            label = {"serial": "serial, this process", "pool": f"pool {jobs} ({context})",
+                     "cli": f"CLI --jobs {jobs} (+ CSV, file)"}[mode]
+            print(f"  {label:<26} {median:>9.3f} {args.runs / median:>8.1f} {serial / median:>8.2f}x   "
+                  + " ".join(f"{t:.3f}" for t in times[config]))
+        for context in args.contexts:
+            one, two = (statistics.median(times[("pool", j, context)]) for j in (1, 2))
+            print(f"  {context}: 2 workers / 1 worker speed-up {one / two:.2f}x")
+        one, two = (statistics.median(times[("cli", j, None)]) for j in (1, 2))
+        print(f"  CLI: --jobs 2 / --jobs 1 speed-up {one / two:.2f}x")
+
+    print("\nworker start-up (pool created → every worker has loaded the PN code and answered), medians:")
+    startups = {(c, j): [] for c in args.contexts for j in (1, 2)}
+    for _ in range(args.rounds):
+        for key in startups:
+            startups[key].append(time_startup(key[1], key[0]))
+    for (context, jobs), values in startups.items():
+        print(f"  {context:<11} {jobs} worker{'s' * (jobs > 1)}: {statistics.median(values):.3f} s   "
+              + " ".join(f"{t:.3f}" for t in values))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
