@@ -69,13 +69,15 @@ def add_parser(subparsers):
                         help="GW frequency (twice the orbital) at which the spins are given; t = 0 there")
     model = parser.add_argument_group("model and output (with --batch: defaults for empty cells)")
     model.add_argument("--approximant", help="T1, T4 (default) or T5 (also TaylorT4, SpinTaylorT4, ...)")
-    model.add_argument("--pn-order", type=float, metavar="ORDER", help="PN order of the nonspinning terms, 0 ... 4.5 (default 3.5)")
+    model.add_argument("--pn-order", type=float, metavar="ORDER",
+                       help="PN order of the nonspinning terms, 0 ... 4.5 (default 3.5)")
     model.add_argument("--spin-orbit-order", type=float, metavar="ORDER",
                        help="PN order of the spin-orbit terms, -1 ... 4 (default min(pn-order, 4); -1: none)")
     model.add_argument("--spin-spin-order", type=float, metavar="ORDER",
                        help="PN order of the spin-spin terms, -1 ... 3 (default min(pn-order, 3); -1: none)")
     model.add_argument("--precession", choices=PRECESSION, help="spin precession model (default: averaged)")
-    model.add_argument("--f-min", type=float, metavar="HZ", help="also integrate backward from f_ref down to this GW frequency")
+    model.add_argument("--f-min", type=float, metavar="HZ",
+                       help="also integrate backward from f_ref down to this GW frequency")
     model.add_argument("--f-max", type=float, metavar="HZ",
                        help="stop at this GW frequency (default: at the end of the inspiral, which is named)")
     model.add_argument("--sampling", metavar="S",
@@ -607,15 +609,22 @@ def _pool_results(pool, futures, unsubmitted, parts):
 
 
 def results_dask(tasks, address):
-    """Yield (index, ok, result) for each (index, params), computed by the Dask cluster at `address`."""
+    """Connect to the Dask scheduler at `address`, submit one task per (index, params) and return a generator
+    of (index, ok, result) as they finish (the runs themselves come back; this process writes them)."""
     try:
-        from distributed import Client, as_completed
+        from distributed import Client
     except ImportError:
         raise UsageError("--scheduler needs Dask's distributed scheduler: pip install 'pnrotor[dask]'") from None
     try:
         client = Client(address, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
     except (OSError, TimeoutError) as error:
         raise UsageError(f"cannot connect to the Dask scheduler at {address}: {error}") from None
+    return _dask_results(client, tasks)
+
+
+def _dask_results(client, tasks):
+    from distributed import as_completed
+
     with client:
         futures = client.map(attempt_chunk, [[task] for task in tasks], pure=False)
         chunk_of = {future.key: [task] for future, task in zip(futures, tasks)}

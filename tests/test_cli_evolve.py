@@ -1,0 +1,484 @@
+"""`pnrotor evolve`: the file of one run equals `pnrotor.evolve` bitwise, its default name and folder,
+refusal to overwrite, one-line errors (exit 2, no file) for bad input, sampling variants, and batches
+from CSV and TOML in this process, on worker processes and on a Dask cluster, with failures listed."""
+
+import dataclasses
+import math
+import os
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+import pytest
+from test_hdf5 import assert_identical
+
+import pnrotor
+from pnrotor import hdf5
+from pnrotor.cli import evolve as cli_evolve
+from pnrotor.cli import main
+
+MAIN = ["--m1", "30", "--m2", "10", "--chi1", "0.6,0,0.2", "--chi2", "0,-0.4,0.1", "--f-ref", "20"]
+MAIN_NAME = "T4_m30_m10_chi1-0.6,0,0.2_chi2-0,-0.4,0.1_f20.h5"
+FAST = ["--m1", "30", "--m2", "10", "--chi1", "0.6,0,0.2", "--chi2", "0,-0.4,0.1", "--f-ref", "100"]
+"""A cheap precessing binary: from 100 Hz, ~4 orbits to the end of the inspiral."""
+FAST_KW = dict(m1=30.0, m2=10.0, chi1=(0.6, 0.0, 0.2), chi2=(0.0, -0.4, 0.1), f_ref=100.0)
+WALL = {"wall_time_s", "wall_time_integrate_s"}
+
+
+def evolve(capsys, *args):
+    code = main(["evolve", *map(str, args)])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_same_run(a, b):
+    """Equal bitwise except the wall times, which differ between any two runs."""
+    for run in (a, b):
+        assert WALL <= run.stats.keys()
+    a_stats = {k: v for k, v in a.stats.items() if k not in WALL}
+    b_stats = {k: v for k, v in b.stats.items() if k not in WALL}
+    assert_identical(a_stats, b_stats, "stats")
+    assert_identical(dataclasses.replace(a, stats={}), dataclasses.replace(b, stats={}))
+
+
+@pytest.fixture
+def in_tmp(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+# --------------------------------------------------------------------------------------------------
+# one run
+# --------------------------------------------------------------------------------------------------
+
+
+def test_main_job_writes_the_evolution_to_waveforms_with_a_summary(in_tmp, capsys):
+    code, out, err = evolve(capsys, *MAIN)
+    assert code == 0 and err == ""
+    path = in_tmp / "waveforms" / MAIN_NAME
+    assert os.listdir(in_tmp) == ["waveforms"] and os.listdir(in_tmp / "waveforms") == [MAIN_NAME]
+    stored = hdf5.read(path)
+    direct = pnrotor.evolve(30, 10, (0.6, 0, 0.2), (0, -0.4, 0.1), 20)
+    assert isinstance(stored, pnrotor.Evolution)
+    assert_same_run(stored, direct)
+
+    s = direct.stats
+    lines = out.splitlines()
+    assert lines[0] == "pnrotor evolve: 30 + 10 Msun, chi1 (0.6, 0, 0.2), chi2 (0, -0.4, 0.1), f_ref 20 Hz (precessing)"
+    assert lines[-1] == f"wrote waveforms/{MAIN_NAME}"
+    assert "T4, PN order 3.5 (spin-orbit 3.5, spin-spin 3), precession averaged, atol 1e-12" in lines[1]
+    M = direct.inputs["M_seconds"]
+    assert f"duration       {direct.t[-1] * M:.6g} s = {direct.t[-1]:.6g} M" in out
+    assert f"ΔΦ/2π          {direct.Phi[-1] / (2 * math.pi):.6g} orbits\n" in out
+    assert f"v              {direct.v[0]:.6g} -> {direct.v[-1]:.6g}" in out
+    assert f"GW frequency   20 Hz -> {direct.f_gw[-1]:.6g} Hz" in out
+    assert f"forward        {direct.termination}: {s['termination_message']}" in out
+    assert "backward       not_integrated: this half was not integrated (no f_min given)" in out
+    assert f"work           {s['nfev']} evaluations, {s['nsteps']} steps ({s['naccepted']} accepted" in out
+    assert f"samples        {len(direct)} (steps)" in out and "s evolving, " in out
+
+
+def test_refuses_to_overwrite_before_computing_and_overwrites_when_asked(in_tmp, capsys, monkeypatch):
+    path = in_tmp / "waveforms" / MAIN_NAME.replace("f20", "f100")
+    assert evolve(capsys, *FAST)[0] == 0
+    before = path.read_bytes()
+    calls = []
+    monkeypatch.setattr(cli_evolve, "_evolve_row", lambda params: calls.append(params))
+    code, out, err = evolve(capsys, *FAST)
+    assert code == 2 and calls == [] and out == ""
+    assert err == f"pnrotor evolve: error: {path.relative_to(in_tmp)} exists; pass --overwrite to replace it\n"
+    assert path.read_bytes() == before
+    monkeypatch.undo()
+    monkeypatch.chdir(in_tmp)
+    inode = path.stat().st_ino
+    code, out, _ = evolve(capsys, *FAST, "--overwrite", "--sampling", "steps")  # the same name
+    assert code == 0 and path.stat().st_ino != inode  # replaced (hdf5.write renames a new file over it)
+    assert_same_run(hdf5.read(path), pnrotor.evolve(**FAST_KW))
+    assert os.listdir(path.parent) == [path.name]
+
+
+def test_output_option_and_compression(tmp_path, capsys):
+    path = tmp_path / "run.h5"
+    assert evolve(capsys, *FAST, "-o", path, "--compression", "lzf")[0] == 0
+    with h5py.File(path) as f:
+        assert f["R"].compression == "lzf" and f["v"].compression == "lzf"
+    assert_same_run(hdf5.read(path), pnrotor.evolve(**FAST_KW))
+    assert evolve(capsys, *FAST, "-o", path, "--overwrite", "--compression", "gzip")[0] == 0
+    with h5py.File(path) as f:
+        assert f["R"].compression == "gzip"
+    assert os.listdir(tmp_path) == ["run.h5"]
+
+
+def test_default_name_lists_every_option_away_from_its_default(in_tmp, capsys):
+    args = ["--f-min", "90", "--f-max", "200", "--approximant", "TaylorT5", "--pn-order", "3", "--spin-orbit-order",
+            "2.5", "--spin-spin-order", "2", "--precession", "averaged_varpi", "--atol", "1e-10", "--sampling", "1/4096"]
+    code, out, _ = evolve(capsys, *FAST, *args)
+    name = ("T5_m30_m10_chi1-0.6,0,0.2_chi2-0,-0.4,0.1_f100_fmin90_fmax200_pn3_so2.5_ss2_atol1e-10_averaged_varpi"
+            "_dt0.000244140625.h5")
+    assert code == 0 and os.listdir(in_tmp / "waveforms") == [name]
+    stored = hdf5.read(in_tmp / "waveforms" / name)
+    direct = pnrotor.evolve(**FAST_KW, f_min=90, f_max=200, approximant="T5", pn_order=3, spin_orbit_order=2.5,
+                            spin_spin_order=2, precession="averaged_varpi", atol=1e-10, sampling=1 / 4096)
+    assert_same_run(stored, direct)
+    assert direct.termination == "f_max" and direct.stats["termination_backward"] == "f_min"
+    assert "backward       f_min: v reached the requested start frequency f_min" in out
+    assert "T5, PN order 3 (spin-orbit 2.5, spin-spin 2), precession averaged_varpi, atol 1e-10" in out
+    # -0.0 and 0 give the same name; instantaneous precession is named
+    assert cli_evolve.default_name(dict(FAST_KW, chi1=(-0.0, 0.0, 0.5), **cli_evolve.DEFAULTS)).startswith(
+        "T4_m30_m10_chi1-0,0,0.5_")
+    code, _, _ = evolve(capsys, *FAST, "--precession", "instantaneous", "--sampling", "final")
+    assert code == 0 and (in_tmp / "waveforms" / MAIN_NAME.replace("f20", "f100_instantaneous_final")).exists()
+
+
+@pytest.mark.parametrize("sampling, expected, orbits", [
+    ("steps", "steps", "exact"),
+    ("final", "final", "exact"),
+    ("0.000244", 0.000244, "approx"),
+    ("1/2048", 1 / 2048, "approx"),
+    ("per_orbit:8", ("per_orbit", 8), "approx"),
+])
+def test_sampling_variants_equal_evolve(sampling, expected, orbits, tmp_path, capsys):
+    path = tmp_path / "run.h5"
+    code, out, _ = evolve(capsys, *FAST, "--f-min", "95", "--sampling", sampling, "-o", path)
+    assert code == 0
+    direct = pnrotor.evolve(**FAST_KW, f_min=95, sampling=expected)
+    assert_same_run(hdf5.read(path), direct)
+    orbit_line = next(line for line in out.splitlines() if "ΔΦ/2π" in line)
+    if sampling == "final":  # one sample, at the end: the start is not known
+        assert "orbits unknown (one sample, not the start)" in orbit_line
+    elif orbits == "exact":
+        assert f"{(direct.Phi[-1] - direct.Phi[0]) / (2 * math.pi):.6g} orbits" in orbit_line and "~" not in orbit_line
+    else:
+        assert f"~{(direct.Phi[-1] - direct.Phi[0]) / (2 * math.pi):.6g} orbits (first to last sample)" in orbit_line
+    v0 = (math.pi * direct.inputs["M_seconds"] * 95) ** (1 / 3)  # exact start of the integration, whatever the sampling
+    assert f"v              {v0:.6g} -> {direct.stats['v_final']:.6g}" in out
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--m1", "0"], "m1 must be a finite positive mass, got 0.0"),
+    (["--m2", "-3"], "m2 must be a finite positive mass"),
+    (["--m1", "nan"], "m1 must be a finite positive mass, got nan"),
+    (["--chi1", "0.9,0.5,0.1"], "|chi1| = "),
+    (["--chi2", "0,0,1.01"], "|chi2| = 1.01 exceeds 1"),
+    (["--chi1", "nan,0,0"], "--chi1 must be three finite numbers separated by commas"),
+    (["--chi1", "0.1,0.2"], "--chi1 must be three finite numbers separated by commas, such as 0.6,0,0.2; got '0.1,0.2'"),
+    (["--chi2", "a,b,c"], "--chi2 must be three finite numbers"),
+    (["--chi1", "0.1,0.2,0.3,0.4"], "--chi1 must be three"),
+    (["--f-ref", "0"], "f_ref must be a finite positive frequency in Hz, got 0.0"),
+    (["--f-ref", "-20"], "f_ref must be a finite positive frequency"),
+    (["--f-min", "150"], "f_min = 150.0 Hz must be below f_ref = 100.0 Hz"),
+    (["--f-max", "50"], "f_max = 50.0 Hz must be above f_ref"),
+    (["--approximant", "T3"], "approximant must be one of T1, T4, T5"),
+    (["--pn-order", "3.3"], "pn_order must be a multiple of 0.5 in [0.0, 4.5], got 3.3"),
+    (["--pn-order", "5"], "pn_order must be a multiple of 0.5"),
+    (["--spin-orbit-order", "5"], "spin_orbit_order must be a multiple of 0.5 in [-1.0, 4.0]"),
+    (["--spin-spin-order", "3.5"], "spin_spin_order must be a multiple of 0.5 in [-1.0, 3.0]"),
+    (["--atol", "0"], "atol must be > 0"),
+    (["--atol", "-1e-9"], "atol must be > 0"),
+    (["--sampling", "sometimes"], "--sampling must be steps, final, per_orbit:N or a time step in seconds"),
+    (["--sampling", "per_orbit:0"], "--sampling per_orbit:N needs a positive integer N"),
+    (["--sampling", "-0.001"], "sampling dt must be a finite positive time in seconds"),
+    (["--sampling", "1/0"], "--sampling must be steps, final"),
+    (["--jobs", "2"], "--jobs applies to --batch runs only"),
+    (["--scheduler", "tcp://127.0.0.1:8786"], "--scheduler applies to --batch runs only"),
+])
+def test_bad_input_exits_2_naming_the_parameter_and_writes_nothing(args, message, in_tmp, capsys):
+    given = dict(zip(FAST[::2], FAST[1::2]))
+    given.update(zip(args[::2], args[1::2]))
+    code, out, err = evolve(capsys, *[f"{option}={value}" for option, value in given.items()])
+    assert code == 2 and out == ""
+    assert err.startswith("pnrotor evolve: error: ") and message in err and err.count("\n") == 1
+    assert os.listdir(in_tmp) == []  # not even waveforms/
+
+
+def test_missing_options_and_output_folder_errors(in_tmp, capsys):
+    code, _, err = evolve(capsys, "--m1", "30", "--chi1", "0,0,0", "--chi2", "0,0,0")
+    assert code == 2 and "missing --m2, --f-ref (or give --batch FILE)" in err
+    code, _, err = evolve(capsys, *FAST, "-o", "no/such/run.h5")
+    assert code == 2 and err == "pnrotor evolve: error: folder no/such does not exist (-o no/such/run.h5); create it first\n"
+    (in_tmp / "folder").mkdir()
+    code, _, err = evolve(capsys, *FAST, "-o", "folder")
+    assert code == 2 and "folder is a folder; give a file name such as folder/T4_m30" in err
+    assert sorted(os.listdir(in_tmp)) == ["folder"] and os.listdir(in_tmp / "folder") == []
+
+
+def test_quiet_prints_only_the_file(tmp_path, capsys):
+    code, out, _ = evolve(capsys, *FAST, "-o", tmp_path / "run.h5", "-q")
+    assert code == 0 and out == f"wrote {tmp_path / 'run.h5'}\n"
+
+
+def test_console_script_exits_2_without_traceback(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "pnrotor", "evolve", *FAST[:-2], "--f-ref", "-5"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and done.stdout == "" and "Traceback" not in done.stderr
+    assert done.stderr == "pnrotor evolve: error: f_ref must be a finite positive frequency in Hz, got -5.0\n"
+    assert os.listdir(tmp_path) == []
+
+
+# --------------------------------------------------------------------------------------------------
+# batches
+# --------------------------------------------------------------------------------------------------
+
+CSV = '''m1,m2,chi1,chi2,f_ref,f_min,sampling,approximant,name
+30,10,"0.6,0,0.2","0,-0.4,0.1",100,,,,
+25,12,"0.1,0.2,0.3","0,0,0.4",120,110,final,,
+-5,10,"0,0,0","0,0,0",100,,,,negative
+40,8,"0.3,0,0","0,0.2,0",100,,per_orbit:4,T1,light
+20,20,"0,0,0","0,0,0",150,,,T5,
+'''
+
+TOML = '''
+[[binary]]
+m1 = 30
+m2 = 10
+chi1 = [0.6, 0, 0.2]
+chi2 = "0,-0.4,0.1"
+f_ref = 100
+
+[[binary]]
+name = "two"
+m1 = 25.0
+m2 = 12.0
+chi1 = [0.1, 0.2, 0.3]
+chi2 = [0.0, 0.0, 0.4]
+f_ref = 120
+f_min = 110
+sampling = "final"
+
+[[binary]]
+m1 = 30
+m2 = 10
+chi1 = [0.0, 0.0, 1.5]
+chi2 = [0, 0, 0]
+f_ref = 100
+name = "spin too large"
+
+[[binary]]
+m1 = 40
+m2 = 8
+chi1 = [0.3, 0, 0]
+chi2 = [0, 0.2, 0]
+f_ref = 100
+sampling = 0.001
+pn_order = 3
+'''
+
+CSV_KW = [
+    dict(FAST_KW),
+    dict(m1=25.0, m2=12.0, chi1=(0.1, 0.2, 0.3), chi2=(0.0, 0.0, 0.4), f_ref=120.0, f_min=110.0, sampling="final"),
+    None,
+    dict(m1=40.0, m2=8.0, chi1=(0.3, 0.0, 0.0), chi2=(0.0, 0.2, 0.0), f_ref=100.0, sampling=("per_orbit", 4),
+         approximant="T1"),
+    dict(m1=20.0, m2=20.0, chi1=(0.0, 0.0, 0.0), chi2=(0.0, 0.0, 0.0), f_ref=150.0, approximant="T5"),
+]
+CSV_NAMES = ["T4_m30_m10_chi1-0.6,0,0.2_chi2-0,-0.4,0.1_f100", "T4_m25_m12_chi1-0.1,0.2,0.3_chi2-0,0,0.4_f120_fmin110_final",
+             "negative", "light", "T5_m20_m20_chi1-0,0,0_chi2-0,0,0_f150"]
+
+
+def write_text(path, text):
+    path.write_text(text)
+    return path
+
+
+def assert_batch(path, names, kwargs):
+    assert hdf5.list_runs(path) == sorted(names)
+    for name, kw in zip(names, kwargs):
+        assert_same_run(hdf5.read(path, name), pnrotor.evolve(**kw))
+
+
+def test_csv_batch_writes_the_good_rows_and_lists_the_bad_one(in_tmp, capsys):
+    write_text(in_tmp / "params.csv", CSV)
+    code, out, err = evolve(capsys, "--batch", "params.csv", "--jobs", "1")
+    assert code == 1 and err == ""  # stderr is not a terminal: no progress bar
+    path = in_tmp / "waveforms" / "params.h5"
+    good = [0, 1, 3, 4]
+    assert_batch(path, [CSV_NAMES[i] for i in good], [CSV_KW[i] for i in good])
+    assert os.listdir(path.parent) == ["params.h5"]
+    lines = out.splitlines()
+    assert lines[0] == "pnrotor evolve --batch params.csv: 5 binaries, on this process"
+    assert lines[1].startswith(f"  row 1 (line 2)  {CSV_NAMES[0]}: ") and "energy_balance" in lines[1]
+    assert lines[2].startswith(f"  row 2 (line 3)  {CSV_NAMES[1]}: ") and "1 samples" in lines[2]
+    assert lines[3].startswith("  row 4 (line 5)  light: ") and lines[4].startswith("  row 5 (line 6)  T5_m20")
+    assert lines[5] == "  FAILED row 3 (line 4) (negative): m1 must be a finite positive mass, got -5.0"
+    assert lines[6].startswith(f"wrote 4 runs to waveforms/params.h5; 1 failed; ") and len(lines) == 7
+
+
+def test_toml_batch_with_command_line_defaults(in_tmp, capsys):
+    write_text(in_tmp / "set.toml", TOML)
+    code, out, _ = evolve(capsys, "--batch", "set.toml", "--jobs", "1", "--approximant", "T5", "--sampling", "final",
+                          "-o", "set.h5", "--compression", "gzip", "-q")
+    assert code == 1
+    first = dict(FAST_KW, approximant="T5", sampling="final")
+    two = dict(CSV_KW[1], approximant="T5")
+    four = dict(m1=40.0, m2=8.0, chi1=(0.3, 0.0, 0.0), chi2=(0.0, 0.2, 0.0), f_ref=100.0, sampling=0.001, pn_order=3,
+                approximant="T5")
+    names = ["T5_m30_m10_chi1-0.6,0,0.2_chi2-0,-0.4,0.1_f100_final", "two", "T5_m40_m8_chi1-0.3,0,0_chi2-0,0.2,0_f100_pn3_dt0.001"]
+    assert_batch(in_tmp / "set.h5", names, [first, two, four])
+    with h5py.File(in_tmp / "set.h5") as f:
+        assert f["two"]["R"].compression == "gzip"
+    assert out.splitlines() == [
+        "  FAILED row 3 ([[binary]] 3) (spin too large): |chi1| = 1.5 exceeds 1",
+        out.splitlines()[-1],
+    ] and out.splitlines()[-1].startswith("wrote 3 runs to set.h5; 1 failed;")
+    assert sorted(os.listdir(in_tmp)) == ["set.h5", "set.toml"]
+
+
+def test_batch_rows_with_bad_values_fail_alone(in_tmp, capsys):
+    text = ('m1,m2,chi1,chi2,f_ref,sampling,name,pn_order\n'
+            '30,10,"0,0,0","0,0,0",100,,ok,\n'
+            'abc,10,"0,0,0","0,0,0",100,,,\n'
+            '30,10,"0,0","0,0,0",100,,,\n'
+            '30,10,"0,0,0","0,0,0",100,often,,\n'
+            '30,10,"0,0,0","0,0,0",100,,a/b,\n'
+            '30,10,"0,0,0","0,0,0",,,,\n'
+            '30,10,"0,0,0","0,0,0",100,,,3.3\n')
+    write_text(in_tmp / "b.csv", text)
+    code, out, _ = evolve(capsys, "--batch", "b.csv", "--jobs", "1", "-q")
+    assert code == 1 and hdf5.list_runs(in_tmp / "waveforms" / "b.h5") == ["ok"]
+    assert out.splitlines()[:-1] == [
+        "  FAILED row 2 (line 3): m1 must be a number, got 'abc'",
+        "  FAILED row 3 (line 4): chi1 must be three finite numbers separated by commas, such as 0.6,0,0.2; got '0,0'",
+        "  FAILED row 4 (line 5): sampling must be steps, final, per_orbit:N or a time step in seconds such as 1/4096, got 'often'",
+        "  FAILED row 5 (line 6): name 'a/b' is not a valid group name (non-empty, no '/', not '.')",
+        "  FAILED row 6 (line 7): f_ref is empty",
+        "  FAILED row 7 (line 8) (T4_m30_m10_chi1-0,0,0_chi2-0,0,0_f100_pn3.3): pn_order must be a multiple of 0.5 in [0.0, 4.5], got 3.3",
+    ]
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("b.csv", "m1,m2,chi1,chi2,f_ref,mass_ratio\n", "unknown column 'mass_ratio'; the columns are m1, m2, chi1"),
+    ("b.csv", "m1,m2,chi1,chi2\n30,10,0,0\n", "missing column f_ref"),
+    ("b.csv", "m1,m2,chi1,chi2,f_ref\n30,10,0.1,0,0,0,0,0,100\n", "line 2: 9 fields for 5 columns (quote vectors"),
+    ("b.csv", "m1,m2,chi1,chi2,f_ref,name\n30,10,\"0,0,0\",\"0,0,0\",100,x\n30,11,\"0,0,0\",\"0,0,0\",100,x\n",
+     "row 1 (line 2) and row 2 (line 3) have the same name 'x'"),
+    ("b.csv", "m1,m2,chi1,chi2,f_ref,m1\n", "repeated column m1"),
+    ("b.csv", "", "is empty"),
+    ("b.csv", "m1,m2,chi1,chi2,f_ref\n", "holds no binaries"),
+    ("b.toml", "[[binary]]\nm1 = 30\nm2 = 10\nchi1 = [0, 0, 0]\nchi2 = [0, 0, 0]\nf_ref = 100\nspin = 1\n",
+     "[[binary]] 1: unknown column 'spin'"),
+    ("b.toml", "[[binaries]]\nm1 = 30\n", "must hold [[binary]] tables only; found 'binaries'"),
+    ("b.toml", "[[binary]]\nm1 = \n", "is not valid TOML"),
+    ("b.json", "{}", "must be .csv or .toml"),
+])
+def test_invalid_batch_file_exits_2_before_running(name, text, message, in_tmp, capsys, monkeypatch):
+    monkeypatch.setattr(cli_evolve, "_evolve_row", lambda params: pytest.fail("ran"))
+    write_text(in_tmp / name, text)
+    code, out, err = evolve(capsys, "--batch", name)
+    assert code == 2 and out == "" and err.startswith("pnrotor evolve: error: ") and message in err
+    assert err.count("\n") == 1 and os.listdir(in_tmp) == [name]
+
+
+def test_batch_usage_errors(in_tmp, capsys):
+    write_text(in_tmp / "p.csv", CSV)
+    for args, message in [
+        (["--m1", "30"], "--m1 cannot be combined with --batch; give it as the column m1"),
+        (["--f-ref", "30"], "--f-ref cannot be combined with --batch"),
+        (["--jobs", "0"], "--jobs must be at least 1, got 0"),
+        (["--jobs", "2", "--scheduler", "tcp://x:1"], "--jobs applies to local runs"),
+        (["-o", "missing/p.h5"], "folder missing does not exist"),
+    ]:
+        code, _, err = evolve(capsys, "--batch", "p.csv", *args)
+        assert code == 2 and message in err, (args, err)
+    code, _, err = evolve(capsys, "--batch", "nothing.csv")
+    assert code == 2 and err == "pnrotor evolve: error: nothing.csv: no such file\n"
+    (in_tmp / "waveforms").mkdir()
+    (in_tmp / "waveforms" / "p.h5").write_bytes(b"old")
+    code, _, err = evolve(capsys, "--batch", "p.csv", "--jobs", "1")
+    assert code == 2 and "waveforms/p.h5 exists; pass --overwrite" in err
+    assert (in_tmp / "waveforms" / "p.h5").read_bytes() == b"old"
+    assert evolve(capsys, "--batch", "p.csv", "--jobs", "1", "--overwrite")[0] == 1
+    assert len(hdf5.list_runs(in_tmp / "waveforms" / "p.h5")) == 4
+    assert sorted(os.listdir(in_tmp / "waveforms")) == ["p.h5"]
+
+
+@pytest.mark.parametrize("method", ["default", "forkserver"])
+def test_parallel_batch_equals_serial_bitwise(method, in_tmp, capsys, monkeypatch):
+    if method != "default":
+        monkeypatch.setattr(cli_evolve, "start_method", lambda: method)
+    rows = ["m1,m2,chi1,chi2,f_ref,sampling"]
+    rng = np.random.default_rng(6)
+    for _ in range(10):
+        c1, c2 = rng.uniform(-0.5, 0.5, (2, 3)).tolist()
+        sampling = rng.choice(["steps", "final", "1/4096", "per_orbit:3"])
+        rows.append(f'{rng.uniform(20, 40)!r},{rng.uniform(5, 20)!r},"{",".join(map(repr, c1))}","{",".join(map(repr, c2))}",'
+                    f"{rng.uniform(80, 120)!r},{sampling}")
+    rows.append('10,10,"0,0,2","0,0,0",100,')  # fails in a worker
+    write_text(in_tmp / "many.csv", "\n".join(rows) + "\n")
+    code, out_serial, _ = evolve(capsys, "--batch", "many.csv", "--jobs", "1", "-o", "serial.h5")
+    assert code == 1 and "on this process" in out_serial
+    code, out_pool, _ = evolve(capsys, "--batch", "many.csv", "--jobs", "2", "--compression", "lzf")  # to waveforms/
+    assert code == 1 and "on 2 worker processes" in out_pool
+    assert "FAILED row 11 (line 12) (T4_m10_m10_chi1-0,0,2_chi2-0,0,0_f100): |chi1| = 2.0 exceeds 1" in out_pool
+    pool = in_tmp / "waveforms" / "many.h5"
+    names = hdf5.list_runs(in_tmp / "serial.h5")
+    assert len(names) == 10 and hdf5.list_runs(pool) == names
+    for name in names:
+        assert_same_run(hdf5.read(pool, name), hdf5.read(in_tmp / "serial.h5", name))
+    with h5py.File(pool) as f:
+        assert f[names[0]]["t"].compression == "lzf"
+    # the same lines, in row order, whichever worker finished first
+    strip = lambda out: [line.split(": ", 1)[0] for line in out.splitlines()[1:-1]]  # noqa: E731
+    assert strip(out_pool) == strip(out_serial)
+    assert sorted(os.listdir(in_tmp)) == ["many.csv", "serial.h5", "waveforms"]
+    assert os.listdir(in_tmp / "waveforms") == ["many.h5"]  # no part files left
+
+
+def test_progress_bar_on_a_terminal_and_quiet(in_tmp, capsys, monkeypatch):
+    write_text(in_tmp / "p.csv", CSV)
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    code, _, err = evolve(capsys, "--batch", "p.csv", "--jobs", "1", "-o", "a.h5")
+    assert code == 1 and "evolve: 100%" in err and "5/5" in err  # rows that parse, the failing one included
+    code, out, err = evolve(capsys, "--batch", "p.csv", "--jobs", "1", "-o", "b.h5", "--quiet")
+    assert code == 1 and err == "" and len(out.splitlines()) == 2 and "FAILED row 3" in out
+
+
+def test_interrupted_batch_leaves_no_file(in_tmp, capsys, monkeypatch):
+    write_text(in_tmp / "p.csv", CSV)
+    real = cli_evolve._evolve_row
+    calls = []
+
+    def interrupt_second(params):
+        calls.append(params)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(params)
+
+    monkeypatch.setattr(cli_evolve, "_evolve_row", interrupt_second)
+    code, _, err = evolve(capsys, "--batch", "p.csv", "--jobs", "1")
+    assert code == 130 and err == "pnrotor evolve: interrupted\n" and len(calls) == 2
+    assert os.listdir(in_tmp / "waveforms") == []  # the first run was written, to a temporary file, now removed
+
+
+def test_dask_cluster_batch_equals_local(in_tmp, capsys):
+    distributed = pytest.importorskip("distributed")
+    write_text(in_tmp / "p.csv", CSV)
+    assert evolve(capsys, "--batch", "p.csv", "--jobs", "1", "-o", "local.h5")[0] == 1
+    with distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1, dashboard_address=None) as cluster:
+        code, out, _ = evolve(capsys, "--batch", "p.csv", "--scheduler", cluster.scheduler_address, "-o", "dask.h5")
+    assert code == 1 and f"on Dask scheduler {cluster.scheduler_address}" in out
+    assert "FAILED row 3 (line 4) (negative): m1 must be a finite positive mass, got -5.0" in out
+    names = hdf5.list_runs(in_tmp / "local.h5")
+    assert hdf5.list_runs(in_tmp / "dask.h5") == names and len(names) == 4
+    for name in names:
+        assert_same_run(hdf5.read(in_tmp / "dask.h5", name), hdf5.read(in_tmp / "local.h5", name))
+
+
+def test_scheduler_without_dask_or_unreachable(in_tmp, capsys, monkeypatch):
+    write_text(in_tmp / "p.csv", CSV)
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import fails as if not installed
+    code, _, err = evolve(capsys, "--batch", "p.csv", "--scheduler", "tcp://127.0.0.1:1")
+    assert code == 2 and "pip install 'pnrotor[dask]'" in err
+    monkeypatch.undo()
+    pytest.importorskip("distributed")
+    monkeypatch.chdir(in_tmp)
+    monkeypatch.setattr(cli_evolve, "SCHEDULER_TIMEOUT", "0.5s")
+    code, _, err = evolve(capsys, "--batch", "p.csv", "--scheduler", "tcp://127.0.0.1:1")
+    assert code == 2 and "cannot connect to the Dask scheduler at tcp://127.0.0.1:1" in err
+    assert os.listdir(in_tmp) == ["p.csv"]
+
+
+def test_lazy_exports():
+    from pnrotor.pn.evolve import Evolution, evolve as pn_evolve
+
+    assert pnrotor.evolve is pn_evolve and pnrotor.Evolution is Evolution
