@@ -265,8 +265,9 @@ def test_output_kernel_matches_the_integrators_dense_output():
     ev._fill_history(ev.MODE_ORBITAL, r.dense.seg_t, r.dense.seg_h, r.dense.coef, tq, False, ev._NO_Y,
                      np.array([1.0, 0, 0, 0]), Z, np.zeros(3), np.zeros(3), 0, *hist)
     Y = r.dense(tq)
-    # equal up to the rounding of fused multiply-adds (the ODE kernel contracts, ours need not)
+    # equal up to the rounding of fused multiply-adds (the ODE kernel contracts, ours need not) and, for
+    # R, of two ways of normalizing (a few ulp of 1: 2 ulp seen)
     np.testing.assert_allclose(hist[0], Y[:, 0], rtol=1e-15, atol=0)
     np.testing.assert_allclose(hist[1], Y[:, 11], rtol=1e-15, atol=1e-15)
     np.testing.assert_allclose(hist[2], Y[:, 1:4], rtol=1e-14, atol=1e-16)
-    np.testing.assert_allclose(hist[4], Y[:, 7:11] / np.linalg.norm(Y[:, 7:11], axis=1)[:, None], rtol=0, atol=2e-16)
+    np.testing.assert_allclose(hist[4], Y[:, 7:11] / np.linalg.norm(Y[:, 7:11], axis=1)[:, None], rtol=0, atol=5e-16)

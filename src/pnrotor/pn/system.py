@@ -136,10 +136,31 @@ def _ell_hat(w, x, y, z):
 
 
 @njit(cache=True, inline="always")
-def _vdot_parts(p, v, lnv, b1, b2, b3, b4, b5, b6, b7, b8):
-    num = eval_series(p, P_NUM, int(p[P_NUM_LEN]), v, lnv, b1, b2, b3, b4, b5, b6, b7, b8)
-    den = eval_series(p, P_DEN, int(p[P_DEN_LEN]), v, lnv, b1, b2, b3, b4, b5, b6, b7, b8)
-    return num, den
+def _spin_basis(y, lx, ly, lz):
+    """The spin invariants (ℓ̂·χ₁, ℓ̂·χ₂, χ₁·χ₂, (ℓ̂·χ₁)(ℓ̂·χ₂), χ₁², (ℓ̂·χ₁)², χ₂², (ℓ̂·χ₂)²) of the
+    state ``y``: the basis b₁…b₈ of :mod:`pnrotor.pn.series`."""
+    c1x, c1y, c1z = y[1], y[2], y[3]
+    c2x, c2y, c2z = y[4], y[5], y[6]
+    a1 = lx * c1x + ly * c1y + lz * c1z
+    a2 = lx * c2x + ly * c2y + lz * c2z
+    s11 = c1x * c1x + c1y * c1y + c1z * c1z
+    s22 = c2x * c2x + c2y * c2y + c2z * c2z
+    return a1, a2, c1x * c2x + c1y * c2y + c1z * c2z, a1 * a2, s11, a1 * a1, s22, a2 * a2
+
+
+@njit(cache=True, inline="always")
+def _series(p, off, len_index, v, lnv, b):
+    """The series stored at ``p[off:]`` (length ``p[len_index]``) at v with the spin basis ``b``."""
+    return eval_series(p, off, int(p[len_index]), v, lnv, b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7])
+
+
+@njit(cache=True, inline="always")
+def _vdot(p, v, b):
+    """v̇ = (32ν/5) v⁹ N(v)/D(v) with the spin basis ``b`` (module docstring)."""
+    lnv = math.log(v)
+    v3 = v * v * v
+    num = _series(p, P_NUM, P_NUM_LEN, v, lnv, b)
+    return p[P_VDOT0] * v3 * v3 * v3 * num / _series(p, P_DEN, P_DEN_LEN, v, lnv, b)
 
 
 @njit(RHS_SIG, cache=True)
@@ -153,21 +174,14 @@ def rhs_precessing(t, y, p, dydt):
 
     X1 = p[P_X1]
     X2 = p[P_X2]
-    # spin invariants (basis of pnrotor.pn.series)
-    a1 = lx * c1x + ly * c1y + lz * c1z
-    a2 = lx * c2x + ly * c2y + lz * c2z
-    s12 = c1x * c2x + c1y * c2y + c1z * c2z
-    s11 = c1x * c1x + c1y * c1y + c1z * c1z
-    s22 = c2x * c2x + c2y * c2y + c2z * c2z
-
-    lnv = math.log(v)
-    num, den = _vdot_parts(p, v, lnv, a1, a2, s12, a1 * a2, s11, a1 * a1, s22, a2 * a2)
+    b = _spin_basis(y, lx, ly, lz)
+    a1, a2 = b[0], b[1]
+    vdot = _vdot(p, v, b)
     v2 = v * v
     v3 = v2 * v
     v5 = v3 * v2
     v6 = v3 * v3
     v8 = v6 * v2
-    vdot = p[P_VDOT0] * v6 * v3 * num / den
 
     # in-plane parts χᵢ⊥ = χᵢ − (ℓ̂·χᵢ) ℓ̂
     p1x, p1y, p1z = c1x - a1 * lx, c1y - a1 * ly, c1z - a1 * lz
@@ -264,19 +278,12 @@ def rhs_precessing_instantaneous(t, y, p, dydt):
     mx, my, mz = c * (rx * ry - rw * rz), 1.0 - c * (rx * rx + rz * rz), c * (ry * rz + rw * rx)
     lx, ly, lz = c * (rx * rz + rw * ry), c * (ry * rz - rw * rx), 1.0 - c * (rx * rx + ry * ry)
 
-    a1 = lx * c1x + ly * c1y + lz * c1z
-    a2 = lx * c2x + ly * c2y + lz * c2z
-    s12 = c1x * c2x + c1y * c2y + c1z * c2z
-    s11 = c1x * c1x + c1y * c1y + c1z * c1z
-    s22 = c2x * c2x + c2y * c2y + c2z * c2z
-    lnv = math.log(v)
-    num, den = _vdot_parts(p, v, lnv, a1, a2, s12, a1 * a2, s11, a1 * a1, s22, a2 * a2)
+    dydt[Y_V] = _vdot(p, v, _spin_basis(y, lx, ly, lz))
     v2 = v * v
     v3 = v2 * v
     v5 = v3 * v2
     v6 = v3 * v3
     v8 = v6 * v2
-    dydt[Y_V] = p[P_VDOT0] * v6 * v3 * num / den
 
     n1 = nx * c1x + ny * c1y + nz * c1z
     n2 = nx * c2x + ny * c2y + nz * c2z
@@ -324,22 +331,16 @@ def rhs_precessing_instantaneous(t, y, p, dydt):
 def events_precessing(t, y, p, g):
     """Event functions for the precessing state (module docstring)."""
     v = y[Y_V]
-    c1x, c1y, c1z = y[1], y[2], y[3]
-    c2x, c2y, c2z = y[4], y[5], y[6]
     lx, ly, lz = _ell_hat(y[7], y[8], y[9], y[10])
-    a1 = lx * c1x + ly * c1y + lz * c1z
-    a2 = lx * c2x + ly * c2y + lz * c2z
-    s12 = c1x * c2x + c1y * c2y + c1z * c2z
-    s11 = c1x * c1x + c1y * c1y + c1z * c1z
-    s22 = c2x * c2x + c2y * c2y + c2z * c2z
+    b = _spin_basis(y, lx, ly, lz)
     lnv = math.log(v) if v > 0.0 else -np.inf
-    num, den = _vdot_parts(p, v, lnv, a1, a2, s12, a1 * a2, s11, a1 * a1, s22, a2 * a2)
+    num = _series(p, P_NUM, P_NUM_LEN, v, lnv, b)
+    den = _series(p, P_DEN, P_DEN_LEN, v, lnv, b)
     g[EV_V_END] = v - p[P_VEND]
-    g[EV_ENERGY] = eval_series(p, P_EP, int(p[P_EP_LEN]), v, lnv, a1, a2, s12, a1 * a2, s11, a1 * a1,
-                               s22, a2 * a2)
+    g[EV_ENERGY] = _series(p, P_EP, P_EP_LEN, v, lnv, b)
     g[EV_VDOT] = num * den
-    g[EV_SPIN1] = 1.0 + p[P_SPINTOL] - s11
-    g[EV_SPIN2] = 1.0 + p[P_SPINTOL] - s22
+    g[EV_SPIN1] = 1.0 + p[P_SPINTOL] - b[4]
+    g[EV_SPIN2] = 1.0 + p[P_SPINTOL] - b[6]
     g[EV_POLE] = den - p[P_DEN_EPS]
 
 
