@@ -402,6 +402,14 @@ def _event_value(events, p, j, t, t_old, h, rc, yint, gtmp):
     return gtmp[j]
 
 
+@njit(cache=True, inline="always")
+def _crossed(g_old, g_new, direction):
+    """Whether an event went from g_old to g_new across zero in its direction (> 0 upward only,
+    < 0 downward only, 0 either): from below to ≥ 0, or from above to ≤ 0."""
+    return ((g_old < 0.0 and g_new >= 0.0 and direction >= 0.0)
+            or (g_old > 0.0 and g_new <= 0.0 and direction <= 0.0))
+
+
 @njit(cache=True)
 def _locate_root(events, p, j, ta, tb, ga, gb, t_old, h, rc, yint, gtmp):
     """Root of event j on the step's interpolant between ta (value ga) and tb (value gb, of the
@@ -624,11 +632,7 @@ def _dop853_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_st
         if n_events > 0:
             events(t_new, ynew, p, g_new)
             for j in range(n_events):
-                go = g_old[j]
-                gn = g_new[j]
-                up = go < 0.0 and gn >= 0.0
-                down = go > 0.0 and gn <= 0.0
-                if (up and ev_dir[j] >= 0.0) or (down and ev_dir[j] <= 0.0):
+                if _crossed(g_old[j], g_new[j], ev_dir[j]):
                     ev_j = j
                     break
 
@@ -644,12 +648,8 @@ def _dop853_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_st
             # locate every triggered event; keep the earliest
             t_best = t_new
             for j in range(ev_j, n_events):
-                go = g_old[j]
-                gn = g_new[j]
-                up = go < 0.0 and gn >= 0.0
-                down = go > 0.0 and gn <= 0.0
-                if (up and ev_dir[j] >= 0.0) or (down and ev_dir[j] <= 0.0):
-                    tr = _locate_root(events, p, j, t, t_new, go, gn, t, h, rc, yint, gtmp)
+                if _crossed(g_old[j], g_new[j], ev_dir[j]):
+                    tr = _locate_root(events, p, j, t, t_new, g_old[j], g_new[j], t, h, rc, yint, gtmp)
                     if direction * (tr - t_best) < 0.0 or event_index < 0:
                         t_best = tr
                         event_index = j
