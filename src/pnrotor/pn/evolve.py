@@ -28,6 +28,7 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 """
 
 import math
+import numbers
 import time
 from dataclasses import dataclass, field
 
@@ -116,7 +117,8 @@ class Evolution:
 # helpers
 # ---------------------------------------------------------------------------------------------------
 
-def _normalize_approximant(approximant):
+def normalize_approximant(approximant):
+    """'T1', 'T4' or 'T5' from 'Tn' (either case), 'TaylorTn' or 'SpinTaylorTn'; else a ValueError."""
     a = str(approximant).strip()
     for prefix in ("SpinTaylor", "Taylor"):
         if a.startswith(prefix):
@@ -159,8 +161,9 @@ def _parse_sampling(sampling):
         if key == "dt":
             return "dt", _ini.seconds(val, "sampling dt")
         if key == "per_orbit":
-            if isinstance(val, bool) or int(val) != val or int(val) < 1:
-                raise ValueError(f"points per orbit must be a positive integer, got {val!r}")
+            if (isinstance(val, bool) or not isinstance(val, numbers.Real)
+                    or not (math.isfinite(val) and val >= 1 and val == int(val))):
+                raise ValueError(f"sampling per_orbit must be a positive integer, got {val!r}")
             return "per_orbit", int(val)
         raise ValueError(f"unknown sampling key {key!r}; use 'dt' or 'per_orbit'")
     # a bare number or Quantity: Δt in seconds
@@ -351,8 +354,8 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         DOP853 tolerances (absolute on every state component; relative).
     sampling : 'steps' | 'final' | float | Quantity | ('dt', Δt) | ('per_orbit', n)
         Output at every accepted step, only the final state, uniformly in time with step Δt seconds
-        (at t = k Δt, t = 0 at f_ref, as LALSuite's grid from fStart), or n points per orbit
-        (Φ = 2πj/n).  Uniform and per-orbit samples come from the dense output.
+        (Δt > 0; at t = k Δt, t = 0 at f_ref, as LALSuite's grid from fStart), or n points per orbit
+        (n ≥ 1 an integer; Φ = 2πj/n).  Uniform and per-orbit samples come from the dense output.
     rotor : {'coprecessing', 'orbital'}
         Which rotor the precessing state holds (see :mod:`pnrotor.pn.system`): the co-precessing R_p
         with R = R_p exp(Φẑ/2) (default, fast) or the full orbital-frame R.
@@ -385,7 +388,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     c1 = _ini.spin_vector(chi1, "chi1")
     c2 = _ini.spin_vector(chi2, "chi2")
     ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
-    approximant = _normalize_approximant(approximant)
+    approximant = normalize_approximant(approximant)
     pn_order = _order(pn_order, "pn_order", 0.0, MAX_ORDER)
     so_order = (min(pn_order, MAX_SO_ORDER) if spin_orbit_order is None
                 else _order(spin_orbit_order, "spin_orbit_order", -1.0, MAX_SO_ORDER))
@@ -397,7 +400,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     mode, sval = _parse_sampling(sampling)
     if not (atol > 0.0 and math.isfinite(atol)) or not (rtol >= 0.0 and math.isfinite(rtol)):
-        raise ValueError("atol must be > 0 and rtol >= 0, both finite")
+        raise ValueError(f"atol must be > 0 and rtol >= 0, both finite; got atol = {atol!r}, rtol = {rtol!r}")
     if precession not in ("averaged", "averaged_varpi", "instantaneous"):
         raise ValueError(f"precession must be 'averaged', 'averaged_varpi' or 'instantaneous', got {precession!r}")
     if precession == "instantaneous":
@@ -413,7 +416,8 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     v_min = None if f_min is None else _ini.v_from_frequency(f_min, M_sec)
     v_max = 1.0 if f_max is None else _ini.v_from_frequency(f_max, M_sec)
     if v0 >= 1.0:
-        raise ValueError(f"f_ref = {f_ref} Hz gives v = {v0:.4g} >= 1")
+        raise ValueError(f"f_ref = {f_ref} Hz gives v = {v0:.4g} >= 1; f_ref must be below "
+                         f"{1.0 / (math.pi * M_sec):.6g} Hz")
     if v_min is not None and not v_min < v0:
         raise ValueError(f"f_min = {f_min} Hz must be below f_ref = {f_ref} Hz")
     if not v_max > v0:
@@ -440,9 +444,11 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
 
     # ---- validity at f_ref -------------------------------------------------------------------------
     if not e0 > 0.0:
-        raise ValueError(f"E'(v) >= 0 at f_ref (v = {v0:.4g}): the PN energy balance is invalid there")
+        raise ValueError(f"f_ref = {f_ref} Hz is too high: E'(v) >= 0 at v = {v0:.4g}, the PN energy balance is "
+                         f"invalid there; choose a lower f_ref")
     if not n0 * d0 > 0.0:
-        raise ValueError(f"dv/dt <= 0 at f_ref (v = {v0:.4g}) for {approximant}")
+        raise ValueError(f"f_ref = {f_ref} Hz is too high: dv/dt <= 0 at v = {v0:.4g} for {approximant}; "
+                         f"choose a lower f_ref")
 
     inputs = {
         "m1_Msun": m1, "m2_Msun": m2, "chi1": c1.tolist(), "chi2": c2.tolist(), "f_ref_Hz": f_ref,
@@ -573,7 +579,7 @@ def lalsuite_orders(approximant, phaseO=7, spinO=-1):
       (LALSuite applies it for spinO = −1).  Its 3PN QM (ℓ̂·S)² flux coefficient differs from ours
       (see :mod:`pnrotor.pn.flux`).
     """
-    a = _normalize_approximant(approximant)
+    a = normalize_approximant(approximant)
     if spinO != -1 or phaseO not in (7, -1):
         raise ValueError("only phaseO = 7 (or -1) with spinO = -1 is mapped")
     return {"pn_order": 3.5, "spin_orbit_order": 2.5 if a == "T1" else 3.0, "spin_spin_order": 3.0,
