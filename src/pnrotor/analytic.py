@@ -262,7 +262,7 @@ class PrecessingNutatingBinary:
     ``alpha`` = π/8, ``alpha_dot`` = 2α/10⁵, ``nu`` = π/80, ``R0`` = exp(−3α x̂/10), ``T`` = 10⁶ (the
     span of the paper's study: 1000 orbits, 100 precession cycles). ``alpha_dot`` and ``R0`` default
     to the paper's expressions in the given ``alpha``; ``R0`` may be any nonzero quaternion (w, x, y, z)
-    and is normalized.
+    and is normalized; all parameters must be finite and ``T`` > 0.
 
     Pass the binary itself as the ``omega`` of :func:`pnrotor.integrate_angular_velocity`: it
     supplies cached right-hand sides (:meth:`integrand`), so nothing is compiled per process.
@@ -283,6 +283,8 @@ class PrecessingNutatingBinary:
 
         for name in ("Omega_orb", "Omega_prec", "alpha", "nu", "T"):
             set_(name, _finite(name, getattr(self, name)))
+        if not self.T > 0.0:
+            raise ValueError(f"T (the span of the study) must be finite and > 0, got {self.T!r}")
         set_("alpha_dot", 2.0 * self.alpha / 1.0e5 if self.alpha_dot is None
              else _finite("alpha_dot", self.alpha_dot))
         if self.R0 is None:
