@@ -1,0 +1,127 @@
+"""Bad input at every public entry point: a ValueError (FileNotFoundError for a missing folder) naming
+the parameter and its allowed range, raised before any integration; from the CLI a one-line error,
+exit status 2 and no file written (issue 7)."""
+
+import math
+import os
+
+import numpy as np
+import pytest
+from ode_problems import linear
+
+import pnrotor
+from pnrotor.analytic import PrecessingNutatingBinary
+from pnrotor.cli import main
+from pnrotor.ode import bulirsch_stoer, dop853
+from pnrotor.pn.evolve import normalize_approximant
+
+NAN, INF = math.nan, math.inf
+GOOD = dict(m1=10.0, m2=10.0, chi1=(0.0, 0.0, 0.0), chi2=(0.0, 0.0, 0.0), f_ref=20.0)
+
+# (keyword overrides of GOOD, the parameter the message must name)
+EVOLVE_CASES = [
+    (dict(m1=0.0), "m1"), (dict(m2=-1.0), "m2"), (dict(m1=NAN), "m1"), (dict(m2=INF), "m2"),
+    (dict(chi1=(0.0, 0.0, 1.5)), r"\|chi1\|"), (dict(chi2=(0.8, 0.8, 0.0)), r"\|chi2\|"),
+    (dict(chi1=(NAN, 0.0, 0.0)), "chi1"), (dict(chi2=(0.0, INF, 0.0)), "chi2"),
+    (dict(chi1=(0.1, 0.2)), "chi1"), (dict(chi2=np.zeros((2, 3))), "chi2"),
+    (dict(f_ref=0.0), "f_ref"), (dict(f_ref=-5.0), "f_ref"), (dict(f_ref=NAN), "f_ref"), (dict(f_ref=INF), "f_ref"),
+    (dict(f_ref=1e5), "f_ref"),  # v >= 1
+    (dict(f_ref=1500.0), "f_ref"),  # v < 1 but the PN energy balance is already invalid
+    (dict(f_min=NAN), "f_min"), (dict(f_min=30.0), "f_min"), (dict(f_min=-1.0), "f_min"),
+    (dict(f_max=INF), "f_max"), (dict(f_max=10.0), "f_max"), (dict(f_max=0.0), "f_max"),
+    (dict(atol=0.0), "atol"), (dict(atol=-1e-12), "atol"), (dict(atol=NAN), "atol"), (dict(rtol=-1e-9), "rtol"),
+    (dict(rtol=INF), "rtol"),
+    (dict(ell_hat=(0.0, 0.0, 0.0)), "ell_hat"), (dict(ell_hat=(NAN, 0.0, 1.0)), "ell_hat"),
+    (dict(ell_hat=np.eye(3)), "ell_hat"), (dict(n_hat=(0.0, 0.0, 0.0)), "n_hat"),
+    (dict(n_hat=(1.0, 0.0)), "n_hat"), (dict(n_hat=(0.0, INF, 0.0)), "n_hat"),
+    (dict(n_hat=(0.6, 0.0, 0.8)), "n_hat"),  # not orthogonal to ell_hat = ẑ
+    (dict(approximant="T2"), "approximant"), (dict(approximant="EOB"), "approximant"),
+    (dict(pn_order=1.25), "pn_order"), (dict(pn_order=5.0), "pn_order"), (dict(pn_order=-0.5), "pn_order"),
+    (dict(pn_order=NAN), "pn_order"), (dict(spin_orbit_order=0.7), "spin_orbit_order"),
+    (dict(spin_spin_order=9.0), "spin_spin_order"),
+    (dict(precession="exact"), "precession"), (dict(rotor="inertial"), "rotor"),
+    (dict(sampling=0.0), "sampling"), (dict(sampling=-1.0), "sampling"), (dict(sampling=NAN), "sampling"),
+    (dict(sampling=("dt", INF)), "sampling"), (dict(sampling={"dt": 0.0}), "sampling"),
+    (dict(sampling=("per_orbit", 0)), "sampling"), (dict(sampling=("per_orbit", -4)), "sampling"),
+    (dict(sampling=("per_orbit", 2.5)), "sampling"), (dict(sampling={"per_orbit": NAN}), "sampling"),
+    (dict(sampling="everything"), "sampling"), (dict(sampling=("dx", 1.0)), "sampling"),
+    (dict(max_steps=0), "max_steps"),
+]
+
+
+@pytest.mark.parametrize("kw, name", EVOLVE_CASES, ids=[f"{n}-{i}" for i, (_, n) in enumerate(EVOLVE_CASES)])
+def test_evolve_rejects(kw, name):
+    with pytest.raises(ValueError, match=name):
+        pnrotor.evolve(**{**GOOD, **kw})
+
+
+def test_normalize_approximant_is_public():
+    assert normalize_approximant("SpinTaylorT4") == normalize_approximant(" t4") == "T4"
+    with pytest.raises(ValueError, match="approximant must be one of T1, T4, T5"):
+        normalize_approximant("T3")
+
+
+BINARY = PrecessingNutatingBinary(T=100.0)
+IAV_CASES = [
+    (dict(t_span=(0.0, NAN)), "t_span"), (dict(t_span=(-INF, 1.0)), "t_span"), (dict(t_span=(0.0,)), "t_span"),
+    (dict(R0=np.zeros(4)), "R0"), (dict(R0=np.array([1.0, 0.0, 0.0])), "R0"),
+    (dict(R0=np.array([NAN, 0.0, 0.0, 1.0])), "R0"), (dict(R0=np.ones((2, 4))), "R0"),
+    (dict(formulation="euler"), "formulation"), (dict(method="RK4"), "method"),
+    (dict(atol=0.0), "atol"), (dict(atol=-1.0), "atol"), (dict(atol=NAN), "atol"),
+    (dict(rtol=-1e-9), "rtol"), (dict(rtol=NAN), "rtol"),
+]
+
+
+@pytest.mark.parametrize("kw, name", IAV_CASES, ids=[f"{n}-{i}" for i, (_, n) in enumerate(IAV_CASES)])
+def test_integrate_angular_velocity_rejects(kw, name):
+    args = {"t_span": (0.0, 10.0), "R0": np.array([1.0, 0.0, 0.0, 0.0]), **kw}
+    with pytest.raises(ValueError, match=name):
+        pnrotor.integrate_angular_velocity(BINARY, **args)
+
+
+BINARY_CASES = [(dict(Omega_orb=NAN), "Omega_orb"), (dict(Omega_prec=INF), "Omega_prec"),
+                (dict(alpha=NAN), "alpha"), (dict(alpha_dot=INF), "alpha_dot"), (dict(nu=NAN), "nu"),
+                (dict(T=NAN), "T"), (dict(T=0.0), "T"), (dict(T=-1.0), "T"),
+                (dict(R0=np.zeros(4)), "R0"), (dict(R0=(1.0, 0.0, 0.0)), "R0"), (dict(R0=(1.0, NAN, 0.0, 0.0)), "R0")]
+
+
+@pytest.mark.parametrize("kw, name", BINARY_CASES, ids=[f"{n}-{i}" for i, (_, n) in enumerate(BINARY_CASES)])
+def test_precessing_nutating_binary_rejects(kw, name):
+    with pytest.raises(ValueError, match=name):
+        PrecessingNutatingBinary(**kw)
+
+
+ODE_CASES = [(dict(atol=0.0), "atol"), (dict(atol=-1e-10), "atol"), (dict(atol=NAN), "atol"),
+             (dict(atol=np.ones(3) * 1e-10), "atol"), (dict(rtol=-1.0), "rtol"),
+             (dict(t0=NAN), "t0"), (dict(t_end=INF), "t_end"), (dict(y0=np.array([1.0, NAN])), "y0"),
+             (dict(y0=np.ones((2, 2))), "y0"), (dict(max_steps=0), "max_steps"), (dict(max_steps=-5), "max_steps")]
+
+
+@pytest.mark.parametrize("solver", [dop853, bulirsch_stoer])
+@pytest.mark.parametrize("kw, name", ODE_CASES, ids=[f"{n}-{i}" for i, (_, n) in enumerate(ODE_CASES)])
+def test_ode_solvers_reject(solver, kw, name):
+    args = {"t0": 0.0, "y0": np.ones(2), "t_end": 1.0, "atol": 1e-10, **kw}
+    with pytest.raises(ValueError, match=name):
+        solver(linear, args.pop("t0"), args.pop("y0"), args.pop("t_end"), args.pop("atol"), **args)
+
+
+BASE_ARGS = ["--m1", "10", "--m2", "10", "--chi1", "0,0,0", "--chi2", "0,0,0", "--f-ref", "20"]
+CLI_CASES = [  # the ones tests/test_cli_evolve.py does not already cover
+    (["--m2", "inf"], "m2"), (["--f-ref", "nan"], "f_ref"), (["--f-ref", "1e5"], "f_ref"),
+    (["--f-ref", "1500"], "f_ref"), (["--f-min", "inf"], "f_min"), (["--f-max", "nan"], "f_max"),
+    (["--atol", "nan"], "atol"), (["--spin-orbit-order", "nan"], "spin_orbit_order"),
+    (["--spin-spin-order", "0.25"], "spin_spin_order"), (["--sampling", "0"], "sampling"),
+    (["--sampling", "nan"], "sampling"), (["--sampling", "per_orbit:2.5"], "sampling"),
+]
+
+
+@pytest.mark.parametrize("extra, name", CLI_CASES, ids=[f"{n}-{i}" for i, (_, n) in enumerate(CLI_CASES)])
+def test_cli_evolve_rejects(tmp_path, capsys, extra, name):
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    code = main(["evolve", *BASE_ARGS, *extra, "-o", str(out_dir / "run.h5")])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.startswith("pnrotor evolve: error: ") and err.count("\n") == 1 and "Traceback" not in err
+    assert name in err
+    assert os.listdir(out_dir) == []
