@@ -3,6 +3,7 @@ the parameter and its allowed range, raised before any integration; from the CLI
 exit status 2 and no file written (issue 7)."""
 
 import math
+import re
 import os
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 from ode_problems import linear
 
 import pnrotor
+import pnrotor.integrate
 from pnrotor.analytic import PrecessingNutatingBinary
 from pnrotor.cli import main
 from pnrotor.ode import bulirsch_stoer, dop853
@@ -124,4 +126,29 @@ def test_cli_evolve_rejects(tmp_path, capsys, extra, name):
     assert code == 2 and out == ""
     assert err.startswith("pnrotor evolve: error: ") and err.count("\n") == 1 and "Traceback" not in err
     assert name in err
+    assert os.listdir(out_dir) == []
+
+
+VERIFY_CASES = [(["--atol", "0"], "atol"), (["--atol", "nan"], "atol"), (["--formulation", "euler"], "formulation"),
+                (["--method", "RK4"], "method"), (["--t-end", "nan"], "--t-end"), (["--t-end", "0"], "--t-end"),
+                (["--damping", "nan", "1"], "damping"), (["--max-error", "-1"], "--max-error"),
+                (["-o", "missing/run.h5"], "folder .*missing does not exist")]
+
+
+@pytest.mark.parametrize("extra, name", VERIFY_CASES, ids=[f"{n}-{i}" for i, (_, n) in enumerate(VERIFY_CASES)])
+def test_cli_verify_rejects_before_integrating(tmp_path, capsys, monkeypatch, extra, name):
+    integrate = pnrotor.integrate.integrate_angular_velocity
+
+    def only_the_warm_up(omega, t_span, *args, **kwargs):  # verify's warm-up run spans one time unit
+        assert abs(t_span[1] - t_span[0]) <= 1.0, "integrated before rejecting the input"
+        return integrate(omega, t_span, *args, **kwargs)
+
+    monkeypatch.setattr(pnrotor.integrate, "integrate_angular_velocity", only_the_warm_up)
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    extra = [str(out_dir / a) if a.endswith(".h5") else a for a in extra]
+    code = main(["verify", "--formulation", "vectors-damped", "-o", str(out_dir / "run.h5"), *extra])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.startswith("pnrotor verify: error: ") and err.count("\n") == 1 and re.search(name, err)
     assert os.listdir(out_dir) == []

@@ -57,6 +57,8 @@ def run(args):
     get_formulation(args.formulation)
     if args.output and not args.overwrite and Path(args.output).exists():
         raise FileExistsError(f"{args.output} exists; pass --overwrite to replace it")
+    if args.output and not Path(args.output).parent.is_dir():
+        raise FileNotFoundError(f"folder {Path(args.output).parent} does not exist (-o {args.output}); create it first")
     R0 = binary.rotor(0.0)
     options = dict(formulation=args.formulation, method=method, atol=args.atol, damping=tuple(args.damping))
     imported = time.perf_counter()
