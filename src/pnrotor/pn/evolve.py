@@ -449,6 +449,9 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     if not n0 * d0 > 0.0:
         raise ValueError(f"f_ref = {f_ref} Hz is too high: dv/dt <= 0 at v = {v0:.4g} for {approximant}; "
                          f"choose a lower f_ref")
+    if not d0 > _sys.DEN_EPS:   # past the pole guard (event 5 only fires on crossing it): the run would hit the pole
+        raise ValueError(f"f_ref = {f_ref} Hz is too high: the denominator of dv/dt for {approximant} is {d0:.3g} <= "
+                         f"{_sys.DEN_EPS:g} at v = {v0:.4g}, next to its pole (dv/dt -> inf); choose a lower f_ref")
 
     inputs = {
         "m1_Msun": m1, "m2_Msun": m2, "chi1": c1.tolist(), "chi2": c2.tolist(), "f_ref_Hz": f_ref,
