@@ -1,10 +1,12 @@
 """pnrotor.hdf5: bitwise round trips, the stored schema read with plain h5py, atomic writes under
-interruption and kill, refusal to overwrite, and clear errors for missing, truncated and foreign files."""
+interruption and kill, refusal to overwrite, the batch writer (atomic, a cost per run that does not grow
+with the file), and clear errors for missing, truncated and foreign files."""
 
 import dataclasses
 import math
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -394,6 +396,116 @@ def test_single_run_file_as_a_batch(tmp_path):
         f["data"] = np.zeros(3)
     with pytest.raises(ValueError, match="not a pnrotor file"):
         hdf5.write(tmp_path / "foreign.h5", frame_history(), group="x")
+
+
+def test_batch_writer_round_trip_is_bitwise(tmp_path, evolution_kind):
+    runs = {f"h{i}": frame_history(n=50 + 30 * i, message=f"run {i}") for i in range(4)} | {"e": evolution_like()}
+    hdf5.write(tmp_path / "one.h5", frame_history(message="one-run file"))
+    path = tmp_path / "batch.h5"
+    with hdf5.batch(path, compression="lzf") as batch:
+        for name, run in runs.items():
+            batch.add(name, run)
+        batch.copy_from(tmp_path / "one.h5", "/", "copied")
+        assert not path.exists() and len(batch) == 6 and batch.names == [*runs, "copied"]
+    assert hdf5.list_runs(path) == sorted([*runs, "copied"])
+    for name, run in runs.items():
+        assert_identical(hdf5.read(path, group=name), run, name)
+    assert_identical(hdf5.read(path, group="copied"), hdf5.read(tmp_path / "one.h5"))
+    with h5py.File(path) as f:
+        assert f.attrs["kind"] == "batch" and f["h0/R"].compression == "lzf"
+        assert f["copied/R"].compression is None  # copied as stored
+    with hdf5.batch(tmp_path / "again.h5") as batch:  # copy_from keeps the name by default
+        batch.copy_from(path, "e")
+    assert_identical(hdf5.read(tmp_path / "again.h5", group="e"), evolution_like())
+    assert sorted(os.listdir(tmp_path)) == ["again.h5", "batch.h5", "one.h5"]
+
+
+@pytest.mark.parametrize("error", [KeyboardInterrupt, RuntimeError])
+@pytest.mark.parametrize("existing", [None, "overwrite", "append"])
+def test_batch_writer_interrupted_leaves_no_file_or_the_old_one(tmp_path, error, existing):
+    path = tmp_path / "batch.h5"
+    old = frame_history(message="old")
+    if existing:
+        hdf5.write(path, old, group="old")
+    with pytest.raises(error):
+        with hdf5.batch(path, overwrite=existing == "overwrite", append=existing == "append") as batch:
+            batch.add("a", frame_history())
+            batch.add("b", frame_history())
+            assert len([name for name in os.listdir(tmp_path) if TEMPORARY.match(name)]) == 1
+            raise error("interrupted in the middle")
+    assert os.listdir(tmp_path) == (["batch.h5"] if existing else [])
+    if existing:
+        assert hdf5.list_runs(path) == ["old"]
+        assert_identical(hdf5.read(path, group="old"), old)
+
+
+def test_batch_writer_refuses_to_overwrite(tmp_path):
+    path = tmp_path / "batch.h5"
+    hdf5.write(path, frame_history(message="first"), group="a")
+    with pytest.raises(FileExistsError, match=r"batch\.h5 exists; pass overwrite=True"):
+        with hdf5.batch(path):
+            pytest.fail("the block ran")
+    with pytest.raises(FileExistsError, match=r"already has run 'a'; pass overwrite=True"):
+        with hdf5.batch(path, append=True) as batch:
+            batch.add("b", frame_history(message="b"))
+            batch.add("a", frame_history(message="second"))
+    assert hdf5.list_runs(path) == ["a"]  # b was not added either: the exception left the block
+    with pytest.raises(ValueError, match="run 'x' was already added to this batch"):
+        with hdf5.batch(tmp_path / "other.h5") as batch:
+            batch.add("x", frame_history())
+            batch.add("x", frame_history())
+    with hdf5.batch(path, append=True, overwrite=True) as batch:
+        batch.add("a", frame_history(message="second"))
+        batch.add("b", frame_history(message="b"))
+    assert hdf5.list_runs(path) == ["a", "b"] and hdf5.read(path, group="a").message == "second"
+    with hdf5.batch(path, overwrite=True) as batch:
+        batch.add("c", frame_history(message="c"))
+    assert hdf5.list_runs(path) == ["c"]
+    assert os.listdir(tmp_path) == ["batch.h5"]
+
+
+def test_batch_writer_failed_run_and_empty_batch(tmp_path):
+    path = tmp_path / "batch.h5"
+    with hdf5.batch(path) as batch:
+        with pytest.raises(TypeError, match="cannot write a set"):
+            batch.add("bad", frame_history(inputs={"omega": {1, 2}}))
+    assert os.listdir(tmp_path) == []  # no run added: nothing written, even though the failed one opened the file
+    with hdf5.batch(path) as batch:
+        batch.add("a", frame_history())
+        with pytest.raises(TypeError, match="cannot write a set"):
+            batch.add("bad", frame_history(inputs={"omega": {1, 2}}))
+        batch.add("b", frame_history())
+    assert hdf5.list_runs(path) == ["a", "b"] and batch.names == ["a", "b"]  # no half-written run "bad"
+    with h5py.File(path) as f:
+        assert sorted(f) == ["a", "b"]
+
+
+def test_batch_writer_cost_does_not_grow_with_the_file(tmp_path, monkeypatch):
+    """Each run is written into the one open temporary file: no copy of the file per run (what
+    ``write(..., group=NAME)`` costs), one temporary file per batch, and one copy per appending batch."""
+    calls = {"copy": 0, "temporary": 0}
+
+    def count(key, function):
+        def counted(*args, **kwargs):
+            calls[key] += 1
+            return function(*args, **kwargs)
+        return counted
+
+    for name in ("copy", "copy2", "copyfile", "copyfileobj"):
+        monkeypatch.setattr(shutil, name, count("copy", getattr(shutil, name)))
+    monkeypatch.setattr(hdf5, "_temporary_beside", count("temporary", hdf5._temporary_beside))
+    path = tmp_path / "batch.h5"
+    with hdf5.batch(path) as batch:
+        for i in range(30):
+            batch.add(f"r{i}", frame_history(n=200))
+    assert calls == {"copy": 0, "temporary": 1}
+    with hdf5.batch(path, append=True) as batch:
+        for i in range(30, 60):
+            batch.add(f"r{i}", frame_history(n=200))
+    assert calls == {"copy": 1, "temporary": 2}
+    hdf5.write(path, frame_history(), group="one")  # one run through write: a copy of the file
+    assert calls == {"copy": 2, "temporary": 3}
+    assert len(hdf5.list_runs(path)) == 61 and os.listdir(tmp_path) == ["batch.h5"]
 
 
 # --------------------------------------------------------------------------------------------------

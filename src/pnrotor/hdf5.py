@@ -15,8 +15,12 @@ every write and read of it:
   ``NAME.XXXXXXXX.pnrotor-tmp``, fsynced, then renamed over the target with `os.replace`. Any exception,
   Ctrl-C included, removes the temporary file; only a hard kill (SIGKILL, power loss) can leave one,
   and the target is then absent or still the old complete file.
-* Batch files hold one run per top-level group (``write(..., group=NAME)``, `list_runs`); adding a run
-  copies the file to the temporary name first, so it too is atomic. One writer per file at a time.
+* Batch files hold one run per top-level group (`list_runs`). `batch(path)` is the way to write many runs:
+  a context manager whose `Batch` adds each run (`Batch.add`, or `Batch.copy_from` another file) to the
+  temporary file, at the cost of that run alone, and renames the file into place on leaving the block
+  without an exception. ``batch(path, append=True)`` adds runs to an existing batch file, which it copies
+  to the temporary name once; ``write(..., group=NAME)`` adds one run that way, so each such call costs a
+  copy of the file. One writer per file at a time.
 
 Reading checks that the file exists, is HDF5, is not truncated, is a pnrotor file and has a schema
 version this pnrotor knows, and says which of these failed (`FileNotFoundError`, `IsADirectoryError`
@@ -28,7 +32,7 @@ import importlib
 import os
 import secrets
 import shutil
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -89,53 +93,121 @@ UNITS = {
 def write(path, run, *, overwrite=False, compression=None, group=None):
     """Write the run dataclass `run` to `path` atomically and return the path.
 
-    ``group=None`` makes a one-run file; ``group=NAME`` adds the run as group NAME of a batch file
-    (created if absent). An existing file, or an existing run NAME in a batch file, is replaced only with
-    ``overwrite=True``. ``compression`` is None, ``"gzip"`` (portable) or ``"lzf"`` (fast; readers need
-    h5py or the lzf filter plugin).
+    ``group=None`` makes a one-run file; ``group=NAME`` adds the run as group NAME of a batch file (created
+    if absent) with ``batch(path, append=True)``, which copies an existing file: to write many runs, use
+    `batch`. An existing file, or an existing run NAME in a batch file, is replaced only with
+    ``overwrite=True``. ``compression`` is
+    None, ``"gzip"`` (portable) or ``"lzf"`` (fast; readers need h5py or the lzf filter plugin).
     """
     path = Path(path)
-    kind = _kind_of(run)
-    if compression not in COMPRESSIONS:
-        raise ValueError(f"compression must be one of {COMPRESSIONS}, not {compression!r}")
+    _kind_of(run)
+    _check_compression(compression)
     if group is not None:
         _check_name(group, "group")
-    if path.is_dir():
-        raise IsADirectoryError(f"{path} is a folder; give a file name such as {path / 'run.h5'}")
-    if not path.parent.is_dir():
-        raise FileNotFoundError(f"folder {path.parent} does not exist (writing {path}); create it first")
-    append = group is not None and path.exists()
-    if append:
+        with batch(path, overwrite=overwrite, compression=compression, append=True) as runs:
+            runs.add(group, run)
+        return path
+    _check_target(path, overwrite)
+    with _replacing(path, overwrite) as f:
+        _put_run(f, run, compression)
+    return path
+
+
+@contextmanager
+def batch(path, *, overwrite=False, compression=None, append=False):
+    """Write many runs into the batch file `path`, atomically: a context manager that yields a `Batch`.
+
+    ::
+
+        with pnrotor.hdf5.batch("runs.h5") as runs:
+            for name, run in results:
+                runs.add(name, run)
+
+    The runs go into a file under a temporary name beside `path` (``NAME.XXXXXXXX.pnrotor-tmp``), each at
+    the cost of writing that run, whatever the size of the file. Leaving the block without an exception
+    fsyncs it and renames it to `path`; an exception (Ctrl-C included) removes it, and `path` stays as it
+    was. A batch to which no run was added writes nothing.
+
+    An existing `path` is refused (`FileExistsError`, before the block runs) unless ``overwrite=True``,
+    which replaces it with the new batch. With ``append=True`` the runs are added to the existing batch
+    file `path` instead (which is copied to the temporary name at the first run added: the only cost that
+    grows with the file); an existing run is then replaced only with ``overwrite=True``. ``compression``
+    applies to the runs `Batch.add` writes, as in `write`.
+    """
+    path = Path(path)
+    _check_compression(compression)
+    existing = None
+    if append and path.is_file():
         with _open(path) as f:
             if f.attrs.get("kind") != BATCH:
-                raise ValueError(f"{path} holds a single run, not a batch; write run {group!r} to another file")
-            if group in f and not overwrite:
-                raise FileExistsError(f"{path} already has run {group!r}; pass overwrite=True (--overwrite) to replace it")
-    elif path.exists() and not overwrite:
-        raise FileExistsError(f"{path} exists; pass overwrite=True (--overwrite) to replace it")
-
-    temporary = _temporary_beside(path)
+                raise ValueError(f"{path} holds a single run, not a batch; add runs to another file")
+            existing = set(_runs(f))
+    else:
+        _check_target(path, overwrite)
     try:
-        if append:
-            shutil.copyfile(path, temporary)
-        with h5py.File(temporary, "r+" if append else "w") as f:
-            if group is None:
-                target = f
-            else:
-                if not append:
-                    _put_metadata(f, BATCH)
-                if group in f:
-                    del f[group]
-                target = f.create_group(group)
-            _put_metadata(target, kind)
-            _put_fields(target, run, UNITS.get(kind, {}), compression)
-        _fsync(temporary)
-        os.replace(temporary, path)
-    except BaseException:
-        temporary.unlink(missing_ok=True)
-        raise
-    _fsync(path.parent)
-    return path
+        with ExitStack() as stack:
+            runs = Batch(path, compression, overwrite, existing, stack)
+            yield runs
+            if not runs.names:
+                raise _NoRuns  # removes the temporary file if a failed first run opened it
+    except _NoRuns:
+        pass
+
+
+class _NoRuns(Exception):
+    """Leaves a `batch` to which no run was added without writing it."""
+
+
+class Batch:
+    """A batch file being written, as yielded by `batch`: each run added becomes a top-level group.
+
+    ``names`` lists the runs added, in order; ``len(batch)`` is their number."""
+
+    def __init__(self, path, compression, overwrite, existing, stack):
+        self.path, self.compression, self.names = path, compression, []
+        self._overwrite, self._existing, self._stack, self._file = overwrite, existing, stack, None
+
+    def __len__(self):
+        return len(self.names)
+
+    def add(self, name, run):
+        """Write the run dataclass `run` as the run `name`, by the rules of `write`."""
+        _kind_of(run)
+        with self._adding(name) as f:
+            _put_run(f.create_group(name), run, self.compression)
+
+    def copy_from(self, source, group, name=None):
+        """Copy the run `group` of the pnrotor file `source` (``"/"`` for a one-run file) as the run `name`
+        (default: `group`), as stored: HDF5 copies its datasets' bytes, their compression included."""
+        name = group if name is None else name
+        with _open(source) as f, self._adding(name) as target:
+            f.copy(_run_group(f, source, group), target, name)
+
+    @contextmanager
+    def _adding(self, name):
+        """Yield the open temporary file, without a run `name`, for the caller to write it; if that raises, no
+        run `name` is left (a run of that name being replaced included) and the batch can go on."""
+        _check_name(name, "run name")
+        if name in self.names:
+            raise ValueError(f"run {name!r} was already added to this batch of {self.path}")
+        if self._existing is not None and name in self._existing and not self._overwrite:
+            raise FileExistsError(
+                f"{self.path} already has run {name!r}; pass overwrite=True (--overwrite) to replace it"
+            )
+        if self._file is None:
+            copy = self._existing is not None
+            self._file = self._stack.enter_context(_replacing(self.path, self._overwrite or copy, copy))
+            if not copy:
+                _put_metadata(self._file, BATCH)
+        if name in self._file:
+            del self._file[name]
+        try:
+            yield self._file
+        except BaseException:
+            if name in self._file:
+                del self._file[name]
+            raise
+        self.names.append(name)
 
 
 def read(path, group=None):
@@ -184,6 +256,49 @@ def _check_name(name, what):
         raise TypeError(f"{what} must be a string, not {type(name).__name__}")
     if name in ("", ".") or "/" in name or "\x00" in name:
         raise ValueError(f"{what} {name!r} is not a valid HDF5 name (non-empty, no '/', not '.')")
+
+
+def _check_compression(compression):
+    if compression not in COMPRESSIONS:
+        raise ValueError(f"compression must be one of {COMPRESSIONS}, not {compression!r}")
+
+
+def _check_target(path, overwrite):
+    """Raise unless `path` can be written: not a folder, in a folder that exists, new unless `overwrite`."""
+    if path.is_dir():
+        raise IsADirectoryError(f"{path} is a folder; give a file name such as {path / 'run.h5'}")
+    if not path.parent.is_dir():
+        raise FileNotFoundError(f"folder {path.parent} does not exist (writing {path}); create it first")
+    if path.exists() and not overwrite:
+        raise FileExistsError(f"{path} exists; pass overwrite=True (--overwrite) to replace it")
+
+
+@contextmanager
+def _replacing(path, overwrite, copy=False):
+    """Yield an `h5py.File` open for writing under a temporary name beside `path`: new, or with `copy` a copy
+    of `path`. Leaving without an exception fsyncs it and renames it to `path` (refused if `path` appeared
+    meanwhile and not `overwrite`); an exception removes it."""
+    temporary = _temporary_beside(path)
+    try:
+        if copy:
+            shutil.copyfile(path, temporary)
+        with h5py.File(temporary, "r+" if copy else "w") as f:
+            yield f
+        _fsync(temporary)
+        if path.exists() and not overwrite:
+            raise FileExistsError(f"{path} appeared while it was written; pass overwrite=True (--overwrite) to replace")
+        os.replace(temporary, path)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    _fsync(path.parent)
+
+
+def _put_run(g, run, compression):
+    """Store the run dataclass `run` in group `g`: its metadata attributes, then its fields."""
+    kind = _kind_of(run)
+    _put_metadata(g, kind)
+    _put_fields(g, run, UNITS.get(kind, {}), compression)
 
 
 def _put_metadata(g, kind):
