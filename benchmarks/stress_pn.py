@@ -146,6 +146,22 @@ def spin_cases(quick):
                   "[error: max ||χ|−|χ₀||]", runs, worst(runs, "spin_drift"), note=note)
 
 
+def stall_cases(quick):
+    """T4 with |χ| = 0.999 aligned: N (the re-expanded F̂/Ê′) has a simple root at v* = 0.6305, so
+    v̇ ∝ v* − v and v only approaches v*; 'vdot_nonpositive' fires when round-off crosses it."""
+    runs = [run(30.0, 10.0, [0, 0, 0.999], [0, 0, 0.999], 20.0, approximant="T4", atol=atol, integrate_rotor=irot)
+            for atol in (1e-10, 1e-12, 1e-14) for irot in (False, True)]
+    for r in runs:
+        e = r["e"]
+        r["stall"] = float(e.Phi[-1] - e.Phi[np.searchsorted(e.v, e.v[-1] - 1e-6)])
+        r["phi_end"] = float(e.Phi[-1])
+    phi = [r["phi_end"] for r in runs]
+    yield row("PN spin", "|χ| = 0.999 aligned ↑↑, 30 + 10 M☉ from 20 Hz, T4, atol 1e-10/1e-12/1e-14 × aligned/"
+              "precessing state: the approach to the root of T4's flux ratio [error: spread of Φ at the end (rad)]",
+              runs, max(phi) - min(phi), growth=f"Φ gained while v is within 1e-6 of its end: "
+              f"{span(runs, 'stall', '{:.0f}')} rad", note=f"v_end {span(v_end(runs), 'v', '{:.6f}')}")
+
+
 def up_down_cases(quick):
     """Up-down (χ₁ ↑, χ₂ ↓ along ℓ̂; unstable for r < r_ud+ = (√χ₁ + √(qχ₂))⁴/(1 − q)² M, Gerosa et al.
     2015: 27.6 M here, v > 0.19) exact and tilted by 1e-8 rad, against up-up with the same tilt."""
@@ -267,7 +283,7 @@ def sweep_cases(quick):
                    f"({wall:.1f} s); max {worst(runs, 'nsteps')} steps")
 
 
-SECTIONS = (mass_ratio_cases, spin_cases, up_down_cases, tiny_spin_cases, bns_cases, validity_cases,
+SECTIONS = (mass_ratio_cases, spin_cases, stall_cases, up_down_cases, tiny_spin_cases, bns_cases, validity_cases,
             sweep_cases)
 
 
