@@ -172,8 +172,8 @@ def up_down_cases(quick):
     for label, c2 in (("up-down χ₂ = −0.9ẑ", [0, 0, -a]), ("up-up χ₂ = 0.9ẑ", [0, 0, a]), ("χ₂ = 0", [0, 0, 0])):
         runs = [run(m1, m2, tilted(a, TILT), c2, f) for f in (5.0, 10.0, 20.0)]
         tilt_end = [dict(t=float(angle(r["e"].chi1[-1], r["e"].ell_hat[-1]))) for r in runs if r["e"] is not None]
-        growth = (f"ℓ̂ opening at the end / 1e-8: {span(runs, 'ell_end', '{:.2g}')} ÷ 1e-8; "
-                  f"χ₁ tilt from ℓ̂ at the end {span(tilt_end, 't', '{:.2g}')} rad")
+        growth = (f"from a 1e-8 rad tilt: ℓ̂ opens {span(runs, 'ell_end', '{:.2g}')} rad, χ₁'s tilt from ℓ̂ "
+                  f"ends at {span(tilt_end, 't', '{:.2g}')} rad")
         yield row("PN up-down", f"χ₁ = 0.9 tilted 1e-8 rad from ẑ, {label}, 20 + 10 M☉ from 5/10/20 Hz "
                   "[error: ℓ̂ opening at the end]", runs, worst(runs, "ell_end"), growth=growth)
 
