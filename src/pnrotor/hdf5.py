@@ -254,8 +254,13 @@ def _kind_of(run):
 def _check_name(name, what):
     if not isinstance(name, str):
         raise TypeError(f"{what} must be a string, not {type(name).__name__}")
-    if name in ("", ".") or "/" in name or "\x00" in name:
+    if not _valid_name(name):
         raise ValueError(f"{what} {name!r} is not a valid HDF5 name (non-empty, no '/', not '.')")
+
+
+def _valid_name(name):
+    """Whether `name` names a member of a group (rather than a path): non-empty, no '/', not '.'."""
+    return isinstance(name, str) and name not in ("", ".") and "/" not in name and "\x00" not in name
 
 
 def _check_compression(compression):
@@ -437,9 +442,13 @@ def _run_group(f, path, group):
         if f.attrs.get("kind") == BATCH:
             raise ValueError(f"{path} is a batch file; choose a run with group=NAME (--group NAME) from {_runs(f)}")
         return f
-    if group not in _runs(f):
+    if f.attrs.get("kind") != BATCH:
+        g = f if group == "/" else None
+    else:  # the one group, not `_runs`, which opens every group
+        g = f.get(group) if _valid_name(group) else None
+        g = g if isinstance(g, h5py.Group) and "kind" in g.attrs else None
+    if g is None:
         raise ValueError(f"{path} has no run {group!r}; its runs are {_runs(f)}")
-    g = f[group]
     _check_schema(g, f"{path} run {group!r}")
     return g
 
