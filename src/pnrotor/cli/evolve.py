@@ -13,10 +13,11 @@ Batch: ``pnrotor evolve --batch params.csv`` (or ``.toml``) runs one binary per 
 strings in CSV, arrays in TOML; options given on the command line are the defaults of empty cells).
 The file's structure (columns, names) is checked before anything runs. Runs go to ``--jobs`` local
 worker processes (default: every core; ``--jobs 1`` runs in this process) or, with ``--scheduler
-ADDRESS``, to a Dask cluster (the ``pnrotor[dask]`` extra). The workers only compute: this process
-alone writes, each result as it arrives, into one batch file (one group per run, named by the
-``name`` column or `default_name`) under a temporary name that is renamed to ``-o FILE`` (default
-``waveforms/BATCH-STEM.h5``) only when the batch is complete, so Ctrl-C never leaves a partial file.
+ADDRESS``, to a Dask cluster (the ``pnrotor[dask]`` extra). This process alone writes the batch file,
+with `pnrotor.hdf5.batch`, each result as it arrives (one group per run, named by the ``name`` column or
+`default_name`; local workers write their runs into part files, whose groups it copies), under a
+temporary name that is renamed to ``-o FILE`` (default ``waveforms/BATCH-STEM.h5``) only when the batch
+is complete, so Ctrl-C never leaves a partial file.
 A row that fails (bad value, evolve's ``ValueError``) is listed with its row number and message and
 the others are still written; exit status 1 then, 2 when the batch file itself is unusable.
 
@@ -486,23 +487,20 @@ def brief(run):
 
 def write_chunk(chunk, folder, compression):
     """`attempt` on each (index, params) of a chunk, the runs written into a part file in `folder` (group =
-    index) → [(index, ok, Stored or message)]. Encoding HDF5 costs several times a typical run, so the
-    workers do it and the parent only copies the groups into the batch file (HDF5's object copy)."""
+    index, `pnrotor.hdf5.batch`) → [(index, ok, Stored or message)]. Encoding HDF5 costs several times a
+    typical run, so the workers do it and the parent only copies the groups into the batch file
+    (`Batch.copy_from`, HDF5's object copy)."""
+    from pnrotor import hdf5
+
     path = Path(folder) / f"part-{chunk[0][0]}.h5"
-    writer = BatchWriter(path, compression)
     results = []
-    try:
+    with hdf5.batch(path, compression=compression) as part:
         for index, params in chunk:
             ok, result = attempt(params)
             if ok:
-                writer.add(str(index), result)
+                part.add(str(index), result)
                 result = Stored(path, str(index), brief(result))
             results.append((index, ok, result))
-        if writer.count:
-            writer.commit(overwrite=True, durable=False)
-    except BaseException:
-        writer.discard()
-        raise
     return results
 
 
@@ -637,77 +635,9 @@ def _dask_results(client, tasks):
             yield from results
 
 
-class BatchWriter:
-    """One batch file written by this process alone, run after run, under a temporary name beside `path`;
-    `commit` renames it to `path`, `discard` (any exception, Ctrl-C included) removes it.
-
-    The layout is `pnrotor.hdf5`'s (its writer for one group is used for each run); only the file is kept
-    open across runs instead of being copied for each addition as ``hdf5.write(..., group=NAME)`` does."""
-
-    def __init__(self, path, compression):
-        self.path, self.compression = Path(path), compression
-        self.temporary = self.file = None
-        self.count = 0
-
-    def _file(self):
-        if self.file is None:
-            import h5py
-
-            from pnrotor import hdf5
-
-            self.temporary = hdf5._temporary_beside(self.path)
-            self.file = h5py.File(self.temporary, "w")
-            hdf5._put_metadata(self.file, hdf5.BATCH)
-        return self.file
-
-    def add(self, name, run):
-        """Write `run` as the group `name`."""
-        from pnrotor import hdf5
-
-        hdf5._check_name(name, "run name")
-        kind = hdf5._kind_of(run)
-        group = self._file().create_group(name)
-        hdf5._put_metadata(group, kind)
-        hdf5._put_fields(group, run, hdf5.UNITS.get(kind, {}), self.compression)
-        self.count += 1
-
-    def copy(self, name, stored):
-        """Copy the group of a `Stored` run (written by a worker with the same layout) as the group `name`."""
-        import h5py
-
-        from pnrotor import hdf5
-
-        hdf5._check_name(name, "run name")
-        with h5py.File(stored.path, "r") as source:
-            source.copy(source[stored.group], self._file(), name)
-        self.count += 1
-
-    def commit(self, overwrite, durable=True):
-        """Close the file and rename it to `path` (fsynced unless not `durable`, for temporary parts)."""
-        from pnrotor import hdf5
-
-        self.file.close()
-        self.file = None
-        if durable:
-            hdf5._fsync(self.temporary)
-        if self.path.exists() and not overwrite:  # appeared while the batch ran
-            raise FileExistsError(f"{self.path} exists; pass --overwrite to replace it")
-        os.replace(self.temporary, self.path)
-        self.temporary = None
-        if durable:
-            hdf5._fsync(self.path.parent)
-
-    def discard(self):
-        if self.file is not None:
-            self.file.close()
-            self.file = None
-        if self.temporary is not None:
-            self.temporary.unlink(missing_ok=True)
-            self.temporary = None
-
-
 class _InterruptFlag:
-    """Ctrl-C is remembered and raised as KeyboardInterrupt at once, or by `check` after a `deferred` block.
+    """Ctrl-C is remembered and raised as KeyboardInterrupt at once, or by `check` after a `deferred` block
+    (inside one, also when `interruptible` waits for its next item).
 
     Python drops (prints as "Exception ignored") a KeyboardInterrupt raised inside a weakref callback or
     ``__del__``, which h5py runs while the batch is written; raised there, Ctrl-C would be lost and the
@@ -735,6 +665,19 @@ class _InterruptFlag:
         finally:
             self.defer = False
         self.check()
+
+    def interruptible(self, iterator):
+        """Yield the items of `iterator`; Ctrl-C is raised at once while the next one is computed or awaited."""
+        while True:
+            defer, self.defer = self.defer, False
+            try:
+                self.check()
+                item = next(iterator)
+            except StopIteration:
+                return
+            finally:
+                self.defer = defer
+            yield item
 
     def check(self):
         if self.seen:
@@ -783,37 +726,34 @@ def _run_batch(args):
         print(f"pnrotor evolve --batch {args.batch}: {len(rows)} binaries"
               + (f" ({bad} with bad values)" if bad else "") + f", on {where}")
 
-    writer = BatchWriter(path, args.compression)
+    from pnrotor import hdf5
+
     lines = {}
     evolve_seconds = 0.0
     interrupted = _InterruptFlag()
     try:
         if tasks and default_folder:
             Path(DEFAULT_FOLDER).mkdir(exist_ok=True)
-        with _progress_bar(len(tasks), enabled=not args.quiet and sys.stderr.isatty()) as bar:
-            for index, ok, result in results:
-                interrupted.check()
+        # without a run to write no file (and no folder) is needed: an empty list stands in for the batch
+        batch = contextlib.nullcontext([])
+        if tasks:
+            batch = hdf5.batch(path, overwrite=args.overwrite, compression=args.compression)
+        with interrupted.deferred(), batch as writer, \
+                _progress_bar(len(tasks), enabled=not args.quiet and sys.stderr.isatty()) as bar:
+            for index, ok, result in interrupted.interruptible(results):
                 row = rows[index]
                 if ok:
-                    with interrupted.deferred():
-                        if isinstance(result, Stored):
-                            writer.copy(row.name, result)
-                            result = result.brief
-                        else:
-                            writer.add(row.name, result)
-                            result = brief(result)
+                    if isinstance(result, Stored):
+                        writer.copy_from(result.path, result.group, row.name)
+                        result = result.brief
+                    else:
+                        writer.add(row.name, result)
+                        result = brief(result)
                     evolve_seconds += result["wall_time_s"]
                     lines[index] = _batch_line(row, result)
                 else:
                     row.error = result
                 bar.update()
-        interrupted.check()
-        if writer.count:
-            with interrupted.deferred():
-                writer.commit(args.overwrite)
-    except BaseException:
-        writer.discard()
-        raise
     finally:
         results.close()  # stops the workers early after an error or Ctrl-C
         if parts is not None:
@@ -825,9 +765,10 @@ def _run_batch(args):
     for row in failed:
         print(f"  FAILED {row!r}: {row.error}")
     wall = time.perf_counter() - start
-    written = f"wrote {writer.count} run{'s' * (writer.count != 1)} to {path}" if writer.count else "wrote no file"
+    count = len(writer)
+    written = f"wrote {count} run{'s' * (count != 1)} to {path}" if count else "wrote no file"
     print(f"{written}; {len(failed)} failed; {wall:.3g} s in all ({evolve_seconds:.3g} s evolving, "
-          f"{writer.count / wall:.3g} runs/s)")
+          f"{count / wall:.3g} runs/s)")
     return 1 if failed else 0
 
 
