@@ -508,6 +508,14 @@ def test_batch_writer_cost_does_not_grow_with_the_file(tmp_path, monkeypatch):
     assert len(hdf5.list_runs(path)) == 61 and os.listdir(tmp_path) == ["batch.h5"]
 
 
+def test_command_line_starts_without_h5py():
+    """h5py and numpy cost ~0.1 s to import: the CLI's parser (``pnrotor --help``) loads neither."""
+    code = ("import sys; from pnrotor.cli import build_parser; build_parser(); "
+            "print(sorted(m for m in ('h5py', 'numpy', 'pnrotor.hdf5') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout == "[]\n"
+
+
 # --------------------------------------------------------------------------------------------------
 # errors
 # --------------------------------------------------------------------------------------------------

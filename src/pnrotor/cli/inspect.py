@@ -5,14 +5,11 @@ array (shape, dtype, units), every scalar and every dict field (inputs, statisti
 then a short summary — for post-Newtonian runs the duration in M and s, the number of orbits ΔΦ/2π,
 the first and final v and the termination; for frame histories the formulation, method, tolerances,
 status and integrator work. For a batch file: its runs, or one run with ``--group``.
+
+numpy and h5py are imported only when the command runs, so that the CLI starts quickly.
 """
 
-import dataclasses
 import math
-
-import numpy as np
-
-from pnrotor import hdf5
 
 
 def add_parser(subparsers):
@@ -27,6 +24,8 @@ def add_parser(subparsers):
 
 
 def run(args):
+    from pnrotor import hdf5
+
     runs = hdf5.list_runs(args.file)
     if args.group is None and runs != ["/"]:
         print(f"{args.file}: batch file with {len(runs)} run{'s' * (len(runs) != 1)}")
@@ -41,6 +40,12 @@ def run(args):
 
 def describe(path, group=None):
     """The lines `pnrotor inspect` prints for the run in `path` (batch group `group`)."""
+    import dataclasses
+
+    import numpy as np
+
+    from pnrotor import hdf5
+
     meta = hdf5.metadata(path, group)
     result = hdf5.read(path, group)
     units = hdf5.UNITS.get(meta["kind"], {})
@@ -115,6 +120,8 @@ def _table(rows, indent="  "):
 
 def _format(value):
     """Exact text for a stored value: shortest round-trip floats, small arrays in full, large ones summarized."""
+    import numpy as np
+
     if isinstance(value, np.ndarray):
         if value.size <= 8:
             return f"{np.array2string(value, separator=', ', floatmode='unique')} {value.dtype}"

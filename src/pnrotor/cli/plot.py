@@ -5,13 +5,12 @@ v(t), and the components of χ₁ and χ₂. Frame histories: the path of the fr
 sphere and its components, the rotor components w, x, y, z against t, and for runs longer than `ZOOM`
 samples the rotor components of the first `ZOOM` samples. Lines of more than `MAX_POINTS` samples are
 drawn from every k-th sample, and the panel says so.
+
+numpy, h5py and matplotlib are imported only when the command runs, so that the CLI starts quickly.
 """
 
 from pathlib import Path
 
-import numpy as np
-
-from pnrotor import hdf5
 from pnrotor.cli import UsageError
 
 MAX_POINTS = 50_000
@@ -39,6 +38,8 @@ def run(args):
     output = Path(args.output) if args.output else _default_output(Path(args.file), args.group)
     if not output.parent.is_dir():
         raise FileNotFoundError(f"folder {output.parent} does not exist (writing {output})")
+    from pnrotor import hdf5
+
     result = hdf5.read(args.file, args.group)
     figure = Figure(figsize=(12, 8.5), layout="constrained")
     title = args.file if args.group in (None, "/") else f"{args.file} run {args.group!r}"
@@ -72,6 +73,8 @@ def _post_newtonian(figure, result):
 
 
 def _frame_history(figure, result):
+    import numpy as np
+
     from pnrotor.quaternion import rotate
 
     every = _stride(result.t.size)
@@ -94,6 +97,8 @@ def _components(axes, t, values, labels, title):
 
 def _sphere(axes, path, name, every):
     """The unit sphere as a light wireframe, `path` (K, 3) on it, its start and end marked."""
+    import numpy as np
+
     u, w = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
     axes.plot_wireframe(np.cos(u) * np.sin(w), np.sin(u) * np.sin(w), np.cos(w), color="0.85", lw=0.5)
     axes.plot(*path.T, lw=0.8)
