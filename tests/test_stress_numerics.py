@@ -132,8 +132,8 @@ def test_binary_error_grows_sublinearly_not_quadratically(formulation):
     h = integrate_angular_velocity(b, (0.0, T), b.rotor(0.0), formulation, atol=1e-12)
     assert h.status == 0
     delta = b.frame_error(h.t, h.R)
-    assert np.max(delta) < 1e-9
     assert S.slope(h.t, delta, T) < 1.0
+    assert np.max(delta) < 1e-9
 
 
 def test_unnormalized_rotor_norm_is_conserved_to_the_tolerance():
@@ -147,15 +147,17 @@ def test_unnormalized_rotor_norm_is_conserved_to_the_tolerance():
     assert np.max(drift) < 200 * 1e-12  # measured: 6.7e-11
 
 
-@pytest.mark.parametrize("formulation", ["rotor", "generator", "vectors2"])
+@pytest.mark.parametrize("formulation", ["rotor", "generator", "vectors-damped"])
 def test_forward_then_backward_over_1e6_recovers_R0(formulation):
+    # backward, the generator resets as forward and the damping rates change sign (else constraint
+    # violations would grow as e^{λ|t|})
     T = 1e6
     b = PrecessingNutatingBinary()
     R0b = b.rotor(0.0)
     fwd = integrate_angular_velocity(b, (0.0, T), R0b, formulation, atol=1e-12)
     back = integrate_angular_velocity(b, (T, 0.0), fwd.R[-1], formulation, atol=1e-12)
     assert fwd.status == 0 and back.status == 0 and back.t[-1] == 0.0
-    # measured: 7e-11 (rotor), 8e-10 (generator), 1e-11 (vectors2); the forward max δ is 1e-10..7e-10
+    # measured: 7e-11 (rotor), 8e-10 (generator), 4e-12 (vectors-damped); forward max δ 1e-10, 6e-10, 8e-11
     assert quat.frame_error(back.R[-1], R0b) < 3 * np.max(b.frame_error(fwd.t, fwd.R)) + 1e-11
 
 
