@@ -1,5 +1,6 @@
-"""The read-only file commands `pnrotor inspect` and `pnrotor plot`: what they print and draw, and
-one-line errors with exit status 2 (no traceback) for missing, truncated, foreign and other bad files."""
+"""The read-only file commands `pnrotor inspect` and `pnrotor plot`: what they print and draw (δ(t) of
+`pnrotor verify -o` files, against the exact rotor), and one-line errors with exit status 2 (no traceback)
+for missing, truncated, foreign and other bad files."""
 
 import math
 import re
@@ -11,7 +12,9 @@ import numpy as np
 import pytest
 from test_hdf5 import evolution_kind, evolution_like, frame_history  # noqa: F401 (evolution_kind: a fixture)
 
-from pnrotor import __version__, hdf5
+from pnrotor import __version__, hdf5, integrate_angular_velocity
+from pnrotor import quaternion as quat
+from pnrotor.analytic import PrecessingNutatingBinary
 from pnrotor.cli import main
 
 
@@ -124,6 +127,48 @@ def test_plot_long_run_and_batch_group(files, tmp_path, capsys):
     assert main(["plot", str(files["batch"]), "--group", "pn"]) == 0
     assert capsys.readouterr().out.splitlines()[-1] == f"wrote {tmp_path / 'batch-pn.png'}"
     assert_sensible_png(tmp_path / "batch-pn.png", (850, 1200))
+
+
+def test_verify_file_carries_the_binary_and_plot_draws_its_frame_error(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    path = tmp_path / "verify.h5"
+    assert main(["verify", "--t-end", "3e4", "-o", str(path)]) == 0
+    printed = re.search(r"max δ +(\S+) at t = (\S+) ", capsys.readouterr().out)
+    history = hdf5.read(path)
+    alpha = math.pi / 8  # the paper's binary (eq:precession_constants), which verify integrates
+    paper = {"omega": "PrecessingNutatingBinary", "Omega_orb": 2 * math.pi / 1000, "Omega_prec": 2 * math.pi / 10000,
+             "alpha": alpha, "alpha_dot": 2 * alpha / 1e5, "nu": math.pi / 80, "T": 1e6}
+    assert {name: history.inputs[name] for name in paper} == paper
+    assert np.allclose(history.inputs["binary_R0"], [math.cos(0.15 * alpha), -math.sin(0.15 * alpha), 0, 0], atol=1e-16)
+    exact = PrecessingNutatingBinary().rotor(history.t)
+    assert np.array_equal(PrecessingNutatingBinary.from_inputs(history.inputs).rotor(history.t), exact)
+    delta = quat.frame_error(history.R, exact)
+    worst = int(delta.argmax())
+    assert (f"{delta[worst]:.3e}", f"{history.t[worst]:.10g}") == printed.groups()
+    assert main(["plot", str(path)]) == 0
+    assert capsys.readouterr().out == f"wrote {path.with_suffix('.png')}\n"
+    assert_sensible_png(path.with_suffix(".png"), (1250, 1200))  # one row more than without δ
+
+
+def test_plot_draws_the_largest_frame_error_of_each_k_samples():
+    pytest.importorskip("matplotlib")
+    from matplotlib.figure import Figure
+
+    from pnrotor.cli import plot
+
+    binary = PrecessingNutatingBinary()
+    n = 2 * plot.MAX_POINTS + 1
+    t_eval = np.linspace(0.0, 3e4, n)
+    history = integrate_angular_velocity(binary, (0.0, 3e4), binary.rotor(0.0), atol=1e-8, t_eval=t_eval)
+    figure = Figure()
+    plot._frame_history(figure, history, PrecessingNutatingBinary.from_inputs(history.inputs))
+    axes = figure.axes[-1]
+    delta = quat.frame_error(history.R, binary.rotor(history.t))
+    assert axes.get_yscale() == "log" and f"max δ = {delta.max():.3e}" in axes.get_title()
+    assert "the largest δ of each 3 samples" in axes.get_title()
+    t, drawn = axes.lines[0].get_data()
+    assert np.array_equal(t, history.t[::3])
+    assert np.array_equal(drawn, [delta[i : i + 3].max() for i in range(0, n, 3)])
 
 
 def test_plot_without_matplotlib(files, monkeypatch, capsys):

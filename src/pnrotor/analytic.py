@@ -262,7 +262,9 @@ class PrecessingNutatingBinary:
     ``alpha`` = π/8, ``alpha_dot`` = 2α/10⁵, ``nu`` = π/80, ``R0`` = exp(−3α x̂/10), ``T`` = 10⁶ (the
     span of the paper's study: 1000 orbits, 100 precession cycles). ``alpha_dot`` and ``R0`` default
     to the paper's expressions in the given ``alpha``; ``R0`` may be any nonzero quaternion (w, x, y, z)
-    and is normalized; all parameters must be finite and ``T`` > 0.
+    and is normalized (one already unit to rounding is kept as given, since normalizing it again may
+    change its last bits); all parameters must be finite and ``T`` > 0. :meth:`describe` gives the
+    parameters as a run's ``inputs``, and :meth:`from_inputs` rebuilds the binary from them.
 
     Pass the binary itself as the ``omega`` of :func:`pnrotor.integrate_angular_velocity`: it
     supplies cached right-hand sides (:meth:`integrand`), so nothing is compiled per process.
@@ -293,7 +295,8 @@ class PrecessingNutatingBinary:
             R0 = np.array(self.R0, dtype=np.float64)
             if R0.shape != (4,) or not np.all(np.isfinite(R0)) or not np.any(R0):
                 raise ValueError(f"R0 must be a finite nonzero quaternion (w, x, y, z), got {self.R0!r}")
-            R0 = quat.normalize(R0)
+            if abs(R0 @ R0 - 1.0) > 4.0 * np.finfo(np.float64).eps:
+                R0 = quat.normalize(R0)
         R0.setflags(write=False)
         set_("R0", R0)
         p = np.concatenate([[self.Omega_orb, self.Omega_prec, self.alpha, self.alpha_dot, self.nu],
@@ -332,4 +335,15 @@ class PrecessingNutatingBinary:
         return {"omega": "PrecessingNutatingBinary", "Omega_orb": self.Omega_orb,
                 "Omega_prec": self.Omega_prec, "alpha": self.alpha, "alpha_dot": self.alpha_dot,
                 "nu": self.nu, "binary_R0": np.array(self.R0), "T": self.T}
+
+    @classmethod
+    def from_inputs(cls, inputs):
+        """The binary a run's ``inputs`` describe (:meth:`describe`, which
+        :func:`pnrotor.integrate_angular_velocity` puts there; e.g. a `FrameHistory` read from a file of
+        ``pnrotor verify -o``), the same bitwise: its ``params`` and rotors. None when ``inputs`` do not
+        describe one: another ω, or a parameter missing."""
+        names = ("Omega_orb", "Omega_prec", "alpha", "alpha_dot", "nu", "T")
+        if inputs.get("omega") != "PrecessingNutatingBinary" or not all(n in inputs for n in (*names, "binary_R0")):
+            return None
+        return cls(R0=inputs["binary_R0"], **{name: inputs[name] for name in names})
 

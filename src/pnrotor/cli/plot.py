@@ -3,10 +3,14 @@
 Post-Newtonian runs (fields ``ell_hat``, ``v``, ``chi1``, ``chi2``): the path of ℓ̂ on the unit sphere,
 v(t), and the components of χ₁ and χ₂. Frame histories: the path of the frame vector R ẑ R⁻¹ on the unit
 sphere and its components, the rotor components w, x, y, z against t, and for runs longer than `ZOOM`
-samples the rotor components of the first `ZOOM` samples. Lines of more than `MAX_POINTS` samples are
-drawn from every k-th sample, and the panel says so.
+samples the rotor components of the first `ZOOM` samples. Frame histories of the paper's precessing and
+nutating binary (those of ``pnrotor verify -o``, whose inputs describe it:
+`PrecessingNutatingBinary.from_inputs`) add the frame error δ(t) of eq:error_norm against its exact
+rotor, on a log scale, with its maximum. Lines of more than `MAX_POINTS` samples are drawn from every
+k-th sample (δ: the largest of each k samples), and the panel says so.
 
-numpy, h5py and matplotlib are imported only when the command runs, so that the CLI starts quickly.
+numpy, h5py, matplotlib and pnrotor's numba code are imported only when the command runs, so that the CLI
+starts quickly.
 """
 
 from pathlib import Path
@@ -22,7 +26,8 @@ def add_parser(subparsers):
         "plot",
         help="draw a pnrotor HDF5 file into a PNG (needs pnrotor[plot])",
         description="Draw a run stored by pnrotor: ℓ̂ on the sphere, v(t) and spins for post-Newtonian runs; "
-        "the ẑ frame vector and rotor components for frame histories.",
+        "the ẑ frame vector and rotor components for frame histories, and the frame error δ(t) for those of "
+        "the paper's binary (pnrotor verify -o).",
     )
     parser.add_argument("file", help="a pnrotor HDF5 file, e.g. waveforms/NAME.h5")
     parser.add_argument("-o", "--output", metavar="PNG", help="image to write, replaced if present (default: FILE with .png)")
@@ -41,13 +46,15 @@ def run(args):
     from pnrotor import hdf5
 
     result = hdf5.read(args.file, args.group)
-    figure = Figure(figsize=(12, 8.5), layout="constrained")
+    post_newtonian = all(hasattr(result, name) for name in ("ell_hat", "v", "chi1", "chi2"))
+    binary = None if post_newtonian else _binary(result)
+    figure = Figure(figsize=(12, 8.5 if binary is None else 12.5), layout="constrained")
     title = args.file if args.group in (None, "/") else f"{args.file} run {args.group!r}"
     figure.suptitle(f"{title}: {type(result).__name__}")
-    if all(hasattr(result, name) for name in ("ell_hat", "v", "chi1", "chi2")):
+    if post_newtonian:
         _post_newtonian(figure, result)
     else:
-        _frame_history(figure, result)
+        _frame_history(figure, result, binary)
     figure.savefig(output, dpi=100)
     print(f"wrote {output}")
     return 0
@@ -72,20 +79,47 @@ def _post_newtonian(figure, result):
         axes.legend(loc="best")
 
 
-def _frame_history(figure, result):
+def _binary(result):
+    """The `PrecessingNutatingBinary` whose ω the frame history `result` integrated, or None."""
+    from pnrotor.analytic import PrecessingNutatingBinary
+
+    return PrecessingNutatingBinary.from_inputs(result.inputs)
+
+
+def _frame_history(figure, result, binary):
     import numpy as np
 
     from pnrotor.quaternion import rotate
 
+    grid = figure.add_gridspec(2 if binary is None else 3, 2)
     every = _stride(result.t.size)
     t, R = result.t[::every], result.R[::every]
     z = rotate(R, np.array([0.0, 0.0, 1.0])) if R.size else np.empty((0, 3))
-    _sphere(figure.add_subplot(2, 2, 1, projection="3d"), z, "frame vector R ẑ R⁻¹", every)
-    _components(figure.add_subplot(2, 2, 2), t, z, "xyz", f"R ẑ R⁻¹ components{_sampling(every)}")
-    _components(figure.add_subplot(2, 2, 3), t, R, "wxyz", f"rotor components{_sampling(every)}")
+    _sphere(figure.add_subplot(grid[0, 0], projection="3d"), z, "frame vector R ẑ R⁻¹", every)
+    _components(figure.add_subplot(grid[0, 1]), t, z, "xyz", f"R ẑ R⁻¹ components{_sampling(every)}")
+    _components(figure.add_subplot(grid[1, 0]), t, R, "wxyz", f"rotor components{_sampling(every)}")
     if result.t.size > ZOOM:  # fast rotation fills the full-range panel; show its start at full resolution
         title = f"rotor components, first {ZOOM} samples"
-        _components(figure.add_subplot(2, 2, 4), result.t[:ZOOM], result.R[:ZOOM], "wxyz", title)
+        _components(figure.add_subplot(grid[1, 1]), result.t[:ZOOM], result.R[:ZOOM], "wxyz", title)
+    if binary is not None:
+        _frame_error(figure.add_subplot(grid[2, :]), result, binary, every)
+
+
+def _frame_error(axes, result, binary, every):
+    """δ(t) of eq:error_norm against the exact rotor of `binary`, the largest of each `every` samples."""
+    import numpy as np
+
+    delta = binary.frame_error(result.t, result.R)
+    title = "frame error δ against the exact rotor (Boyle 2016, eq:error_norm)"
+    if delta.size:
+        worst = int(delta.argmax())
+        starts = np.arange(0, delta.size, every)
+        axes.plot(result.t[starts], np.maximum.reduceat(delta, starts), lw=0.8)
+        title += f", max δ = {delta[worst]:.3e} at t = {result.t[worst]:.10g}"
+        if every > 1:
+            title += f"\n(the largest δ of each {every} samples)"
+    axes.set_yscale("log")
+    axes.set(xlabel="t", ylabel="δ", title=title)
 
 
 def _components(axes, t, values, labels, title):

@@ -7,6 +7,9 @@ parameters) over [0, T], evaluates δ(t) of eq:error_norm at every step against 
 integrator and compile its code (~1 s when numba's cache holds it, ~10 s when it must compile) and
 that of a first, short integration are printed apart from the timed run.
 The integrator is imported only when the command runs, so that the CLI starts quickly.
+With ``-o FILE.h5`` it writes the `FrameHistory`, whose ``inputs`` hold the binary's parameters
+(`PrecessingNutatingBinary.describe`; `PrecessingNutatingBinary.from_inputs` rebuilds it), so that
+``pnrotor plot FILE.h5`` draws δ(t).
 Exit status 0 when the integration reached T with max δ ≤ ``--max-error``, 1 otherwise.
 """
 
@@ -36,7 +39,9 @@ def add_parser(subparsers):
                         help=f"largest acceptable max δ (default: {DEFAULT_MAX_ERROR:g})")
     parser.add_argument("--damping", type=float, nargs=2, default=(0.01, 0.01), metavar=("LAMBDA", "MU"),
                         help="damping rates of vectors-damped (default: 0.01 0.01)")
-    parser.add_argument("-o", "--output", metavar="FILE.h5", help="write the FrameHistory to this HDF5 file")
+    parser.add_argument("-o", "--output", metavar="FILE.h5",
+                        help="write the FrameHistory, with the binary's parameters, to this HDF5 file "
+                        "(pnrotor plot draws its δ(t))")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing --output file")
     parser.set_defaults(func=run)
 
