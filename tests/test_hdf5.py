@@ -508,6 +508,17 @@ def test_batch_writer_cost_does_not_grow_with_the_file(tmp_path, monkeypatch):
     assert len(hdf5.list_runs(path)) == 61 and os.listdir(tmp_path) == ["batch.h5"]
 
 
+def test_batch_writer_not_durable_skips_the_fsyncs(tmp_path, monkeypatch):
+    synced = []
+    monkeypatch.setattr(hdf5, "_fsync", synced.append)
+    for durable in (True, False):
+        with hdf5.batch(tmp_path / f"{durable}.h5", durable=durable) as batch:
+            batch.add("a", frame_history())
+    assert len(synced) == 2 and synced[1] == tmp_path  # the durable batch's file, then its folder; none after
+    assert TEMPORARY.match(synced[0].name) and synced[0].name.startswith("True.h5.")
+    assert_identical(hdf5.read(tmp_path / "False.h5", group="a"), frame_history())
+
+
 def test_command_line_starts_without_h5py():
     """h5py and numpy cost ~0.1 s to import: the CLI's parser (``pnrotor --help``) loads neither."""
     code = ("import sys; from pnrotor.cli import build_parser; build_parser(); "

@@ -96,8 +96,8 @@ def write(path, run, *, overwrite=False, compression=None, group=None):
     ``group=None`` makes a one-run file; ``group=NAME`` adds the run as group NAME of a batch file (created
     if absent) with ``batch(path, append=True)``, which copies an existing file: to write many runs, use
     `batch`. An existing file, or an existing run NAME in a batch file, is replaced only with
-    ``overwrite=True``. ``compression`` is
-    None, ``"gzip"`` (portable) or ``"lzf"`` (fast; readers need h5py or the lzf filter plugin).
+    ``overwrite=True``. ``compression`` is None, ``"gzip"`` (portable) or ``"lzf"`` (fast; readers need
+    h5py or the lzf filter plugin).
     """
     path = Path(path)
     _kind_of(run)
@@ -114,7 +114,7 @@ def write(path, run, *, overwrite=False, compression=None, group=None):
 
 
 @contextmanager
-def batch(path, *, overwrite=False, compression=None, append=False):
+def batch(path, *, overwrite=False, compression=None, append=False, durable=True):
     """Write many runs into the batch file `path`, atomically: a context manager that yields a `Batch`.
 
     ::
@@ -132,7 +132,9 @@ def batch(path, *, overwrite=False, compression=None, append=False):
     which replaces it with the new batch. With ``append=True`` the runs are added to the existing batch
     file `path` instead (which is copied to the temporary name at the first run added: the only cost that
     grows with the file); an existing run is then replaced only with ``overwrite=True``. ``compression``
-    applies to the runs `Batch.add` writes, as in `write`.
+    applies to the runs `Batch.add` writes, as in `write`. ``durable=False`` skips the fsyncs of the file and
+    its folder, for scratch files that need not survive a crash (after power loss such a file can be
+    missing or incomplete).
     """
     path = Path(path)
     _check_compression(compression)
@@ -146,7 +148,7 @@ def batch(path, *, overwrite=False, compression=None, append=False):
         _check_target(path, overwrite)
     try:
         with ExitStack() as stack:
-            runs = Batch(path, compression, overwrite, existing, stack)
+            runs = Batch(path, compression, overwrite, existing, durable, stack)
             yield runs
             if not runs.names:
                 raise _NoRuns  # removes the temporary file if a failed first run opened it
@@ -161,11 +163,14 @@ class _NoRuns(Exception):
 class Batch:
     """A batch file being written, as yielded by `batch`: each run added becomes a top-level group.
 
-    ``names`` lists the runs added, in order; ``len(batch)`` is their number."""
+    ``names`` lists the runs added, in order; ``len(batch)`` is their number. A name can be added once. If
+    `add` or `copy_from` raises, the batch holds no run of that name (nor the one of the file it was to
+    replace) and can go on."""
 
-    def __init__(self, path, compression, overwrite, existing, stack):
+    def __init__(self, path, compression, overwrite, existing, durable, stack):
         self.path, self.compression, self.names = path, compression, []
-        self._overwrite, self._existing, self._stack, self._file = overwrite, existing, stack, None
+        self._overwrite, self._existing, self._durable, self._stack = overwrite, existing, durable, stack
+        self._file, self._added = None, set()
 
     def __len__(self):
         return len(self.names)
@@ -185,10 +190,10 @@ class Batch:
 
     @contextmanager
     def _adding(self, name):
-        """Yield the open temporary file, without a run `name`, for the caller to write it; if that raises, no
-        run `name` is left (a run of that name being replaced included) and the batch can go on."""
+        """Yield the open temporary file, without a run `name`, for the caller to write it (removed again if
+        that raises)."""
         _check_name(name, "run name")
-        if name in self.names:
+        if name in self._added:
             raise ValueError(f"run {name!r} was already added to this batch of {self.path}")
         if self._existing is not None and name in self._existing and not self._overwrite:
             raise FileExistsError(
@@ -196,7 +201,7 @@ class Batch:
             )
         if self._file is None:
             copy = self._existing is not None
-            self._file = self._stack.enter_context(_replacing(self.path, self._overwrite or copy, copy))
+            self._file = self._stack.enter_context(_replacing(self.path, self._overwrite or copy, copy, self._durable))
             if not copy:
                 _put_metadata(self._file, BATCH)
         if name in self._file:
@@ -208,6 +213,7 @@ class Batch:
                 del self._file[name]
             raise
         self.names.append(name)
+        self._added.add(name)
 
 
 def read(path, group=None):
@@ -279,24 +285,26 @@ def _check_target(path, overwrite):
 
 
 @contextmanager
-def _replacing(path, overwrite, copy=False):
+def _replacing(path, overwrite, copy=False, durable=True):
     """Yield an `h5py.File` open for writing under a temporary name beside `path`: new, or with `copy` a copy
-    of `path`. Leaving without an exception fsyncs it and renames it to `path` (refused if `path` appeared
-    meanwhile and not `overwrite`); an exception removes it."""
+    of `path`. Leaving without an exception fsyncs it (if `durable`) and renames it to `path` (refused if
+    `path` appeared meanwhile and not `overwrite`); an exception removes it."""
     temporary = _temporary_beside(path)
     try:
         if copy:
             shutil.copyfile(path, temporary)
         with h5py.File(temporary, "r+" if copy else "w") as f:
             yield f
-        _fsync(temporary)
+        if durable:
+            _fsync(temporary)
         if path.exists() and not overwrite:
             raise FileExistsError(f"{path} appeared while it was written; pass overwrite=True (--overwrite) to replace")
         os.replace(temporary, path)
     except BaseException:
         temporary.unlink(missing_ok=True)
         raise
-    _fsync(path.parent)
+    if durable:
+        _fsync(path.parent)
 
 
 def _put_run(g, run, compression):
