@@ -151,6 +151,40 @@ def test_termination_spin_magnitude_event():
     assert g[system.EV_SPIN1] < 0 < g[system.EV_SPIN2]
 
 
+@pytest.mark.parametrize("approximant", ["T1", "T4", "T5"])
+def test_vdot_peak_event_is_the_v_derivative_of_vdot(approximant):
+    """Event 6 is v⁻⁸ D² ∂v̇/∂v/(32ν/5) at fixed spins and ℓ̂: checked against a central difference of v̇
+    from the right-hand side, for a precessing state and for the aligned (folded) one."""
+    from pnrotor.pn import system
+    from pnrotor.pn.series import basis_values, eval_at, kmax_from_orders
+    X1, v = 0.7, 0.35
+    kmax = kmax_from_orders(3.5, 3.5, 3)
+    c1, c2 = np.array([0.3, -0.4, 0.5]), np.array([0.0, 0.2, -0.6])
+    y = np.concatenate(([v], c1, c2, [0.9, 0.1, -0.3, 0.2], [0.0]))
+    y[7:11] /= np.linalg.norm(y[7:11])
+    ell = np.array(system._ell_hat(*y[7:11]))
+    bvals = basis_values(ell @ c1, ell @ c2, c1 @ c2, c1 @ c1, c2 @ c2)
+    N, D, _ = system.vdot_series(X1, approximant, kmax)
+    for aligned in (False, True):
+        p = system.make_parameters(X1, approximant, kmax, so_order=3.5, ss_order=3.0,
+                                   aligned_basis=bvals if aligned else None)
+        rhs, events, state = ((system.rhs_aligned, system.events_aligned, np.array([v, 0.0])) if aligned
+                              else (system.rhs_precessing, system.events_precessing, y))
+
+        def vdot(x):
+            s, d = state.copy(), np.empty(state.size)
+            s[0] = x
+            rhs(0.0, s, p, d)
+            return d[0]
+
+        h = 1e-5
+        fd = (vdot(v + h) - vdot(v - h)) / (2 * h)
+        g = np.empty(system.N_EVENTS)
+        events(0.0, state, p, g)
+        expected = fd * eval_at(D, v, bvals) ** 2 / (v ** 8 * p[system.P_VDOT0])
+        assert g[system.EV_VDOT_PEAK] == pytest.approx(expected, rel=1e-7)
+
+
 def test_invalid_inputs():
     with pytest.raises(ValueError):
         evolve(10, 10, [0, 0, 1.2], [0, 0, 0], 20.0)

@@ -18,6 +18,9 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 * ``'v_max'`` — v reached 1 (no f_max given and nothing else stopped the inspiral first);
 * ``'energy_balance'`` — E′(v) ≥ 0: the binding energy no longer decreases with v;
 * ``'vdot_nonpositive'`` — v̇ ≤ 0 (T4: the re-expanded flux ratio vanishes);
+* ``'vdot_peak'`` — ∂v̇/∂v ≤ 0 at the current spins: v̇ stopped increasing with v, so the inspiral no
+  longer accelerates (LALSuite's d²ω/dt² ≤ 0; the well-defined end where T4's flux ratio approaches
+  a root and v would creep towards it forever, :mod:`pnrotor.pn.system` event 6);
 * ``'vdot_divergent'`` — the denominator of v̇ (T5: the re-expanded Ê′/F̂) fell to 1e-3, just before
   the pole where v̇ → ∞ (for T1 the denominator is Ê′ itself and this is reported as
   ``'energy_balance'``);
@@ -48,6 +51,7 @@ TERMINATION_MESSAGES = {
     "v_max": "v reached v_max = 1",
     "energy_balance": "E'(v) >= 0: the PN binding energy stopped decreasing (energy balance breaks down)",
     "vdot_nonpositive": "dv/dt <= 0: the PN energy balance gives no inspiral",
+    "vdot_peak": "d(dv/dt)/dv <= 0: dv/dt stopped increasing with v (the inspiral no longer accelerates)",
     "vdot_divergent": "dv/dt diverges: the denominator of the approximant's dv/dt reached zero",
     "spin_magnitude": "|chi_i| exceeded 1",
     "nonfinite": "the state or its derivative became non-finite",
@@ -178,7 +182,7 @@ def _status_to_termination(res, direction, approximant):
         if idx == _sys.EV_POLE:
             return "energy_balance" if approximant == "T1" else "vdot_divergent"
         return {_sys.EV_ENERGY: "energy_balance", _sys.EV_VDOT: "vdot_nonpositive",
-                _sys.EV_SPIN1: "spin_magnitude", _sys.EV_SPIN2: "spin_magnitude"}[idx]
+                _sys.EV_SPIN1: "spin_magnitude", _sys.EV_SPIN2: "spin_magnitude", _sys.EV_VDOT_PEAK: "vdot_peak"}[idx]
     return {STATUS_SUCCESS: "time_limit", STATUS_MAX_STEPS: "max_steps",
             STATUS_STEP_UNDERFLOW: "step_underflow", STATUS_NONFINITE: "nonfinite"}[res.status]
 
@@ -437,7 +441,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     kmax = kmax_from_orders(pn_order, so_order, ss_order)
     a1, a2 = float(np.dot(ell, c1)), float(np.dot(ell, c2))
     bvals = basis_values(a1, a2, float(np.dot(c1, c2)), float(np.dot(c1, c1)), float(np.dot(c2, c2)))
-    p, (n0, d0, e0) = _sys.make_parameters(
+    p, (n0, d0, e0, peak0) = _sys.make_parameters(
         X1, approximant, kmax, so_order=so_order, ss_order=ss_order, kappa1=kappa1, kappa2=kappa2, v_end=v_max,
         rotor=rotor, phase_shift=precession_phase_shift, aligned_basis=bvals if use_aligned else None,
         omega_l="varpi" if precession == "averaged_varpi" else "torque", basis=bvals, v_check=v0)
@@ -452,6 +456,9 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     if not d0 > _sys.DEN_EPS:   # past the pole guard (event 5 only fires on crossing it): the run would hit the pole
         raise ValueError(f"f_ref = {f_ref} Hz is too high: the denominator of dv/dt for {approximant} is {d0:.3g} <= "
                          f"{_sys.DEN_EPS:g} at v = {v0:.4g}, next to its pole (dv/dt -> inf); choose a lower f_ref")
+    if not peak0 > 0.0:   # past the peak of dv/dt (event 6 only fires on crossing it)
+        raise ValueError(f"f_ref = {f_ref} Hz is too high: dv/dt no longer increases with v at v = {v0:.4g} for "
+                         f"{approximant} (past the end of the inspiral); choose a lower f_ref")
 
     inputs = {
         "m1_Msun": m1, "m2_Msun": m2, "chi1": c1.tolist(), "chi2": c2.tolist(), "f_ref_Hz": f_ref,
@@ -481,7 +488,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     t_int = time.perf_counter()
     res_f = dop853(rhs, 0.0, y0, 4.0 * tau0 + 1.0e4, atol, rtol=rtol, args=p, max_steps=max_steps,
                    t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS, **CONTROLLER,
-                   event_direction=np.array([1.0, 0.0, 0.0, 0.0, 0.0, -1.0]))
+                   event_direction=np.array([1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0]))
     term_f = _status_to_termination(res_f, "f_max" if f_max is not None else "v_max", approximant)
     # ---- backward --------------------------------------------------------------------------------
     res_b = None
@@ -492,7 +499,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         t_back = -(2.0 * (_ini.newtonian_time_to_coalescence(v_min, nu) - tau0) + 1.0e4)
         res_b = dop853(rhs, 0.0, y0, t_back, atol, rtol=rtol, args=pb, max_steps=max_steps,
                        t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS, **CONTROLLER,
-                       event_direction=np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0]))
+                       event_direction=np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0]))
         term_b = _status_to_termination(res_b, "f_min", approximant)
     t_int = time.perf_counter() - t_int
 

@@ -158,6 +158,17 @@ def divide(N, D, kmax):
 
 
 @njit(cache=True)
+def v_derivative(C):
+    """The series of v dC/dv: v d/dv[v^k(c + c_L ln v)] = v^k[(k c + c_L) + k c_L ln v] (same truncation)."""
+    D = np.empty_like(C)
+    for k in range(C.shape[0]):
+        for b in range(C.shape[1]):
+            D[k, b, 0] = k * C[k, b, 0] + C[k, b, 1]
+            D[k, b, 1] = k * C[k, b, 1]
+    return D
+
+
+@njit(cache=True)
 def eval_at(C, v, basis):
     """Σ_k v^k Σ_b B_b (C[k,b,0] + C[k,b,1] ln v) at one v (numba; see :func:`evaluate`)."""
     lnv = math.log(v)

@@ -51,6 +51,13 @@ Events (all terminal), filled by :func:`events_precessing` / :func:`events_align
      vanish.  v̇ = K/D has a pole there with v* − v ∝ √(t* − t), which no step can cross; stopping at
      D = DEN_EPS = 1e-3 leaves t* − t ≈ DEN_EPS²/(2K|dD/dv|) ~ 1e-4 M (a phase of ~1e-5 rad) and
      v* − v ~ 1e-3.  (With 1e-6 the remaining interval, ~1e-10 M, is below the resolution of t ~ 1e5.)
+  6: 9ND + (vN′)D − N(vD′) = v^{-8} D² ∂v̇/∂v / (32ν/5), at the current spins and ℓ̂: v̇ stopped
+     increasing with v.  Needed because event 2 alone is no end where N has a simple root v* (T4 with
+     |χ| = 0.999 aligned at 3.5PN: v* = 0.6305): there v̇ ∝ v* − v, v approaches v* only
+     exponentially, and the phase gained before round-off ends the run depends on atol (tens of
+     radians).  LALSuite's SpinTaylor stops on the same condition (d²ω/dt² ≤ 0 between steps, its
+     code 1026); for aligned spins v̈ = v̇ ∂v̇/∂v, so the two tests agree, and with precessing spins ours
+     ignores the precession's slow modulation of v̇ through the spin invariants.
 """
 
 import math
@@ -61,7 +68,7 @@ from numba import njit
 from ..ode import EVENTS_SIG, RHS_SIG
 from .energy import energy_derivative_series
 from .series import (NB, NK, NL, divide, eval_at, eval_series, eval_series0, fold_and_store,
-                     truncate)
+                     truncate, v_derivative)
 
 # ---------------------------------------------------------------------------------------------------
 # state layout
@@ -77,8 +84,8 @@ YA_V = 0
 YA_PHI = 1
 N_ALIGNED = 2
 
-N_EVENTS = 6
-EV_V_END, EV_ENERGY, EV_VDOT, EV_SPIN1, EV_SPIN2, EV_POLE = range(N_EVENTS)
+N_EVENTS = 7
+EV_V_END, EV_ENERGY, EV_VDOT, EV_SPIN1, EV_SPIN2, EV_POLE, EV_VDOT_PEAK = range(N_EVENTS)
 
 # ---------------------------------------------------------------------------------------------------
 # parameter vector layout
@@ -116,7 +123,9 @@ SERIES_SIZE = NK * NB * NL
 P_NUM = P_SERIES
 P_DEN = P_NUM + SERIES_SIZE
 P_EP = P_DEN + SERIES_SIZE
-P_SIZE = P_EP + SERIES_SIZE
+P_NUM_V = P_EP + SERIES_SIZE    # v dN/dv and v dD/dv (event 6), as long as N and D
+P_DEN_V = P_NUM_V + SERIES_SIZE
+P_SIZE = P_DEN_V + SERIES_SIZE
 
 SPIN_TOL = 1e-10
 DEN_EPS = 1e-3
@@ -342,6 +351,8 @@ def events_precessing(t, y, p, g):
     g[EV_SPIN1] = 1.0 + p[P_SPINTOL] - b[4]
     g[EV_SPIN2] = 1.0 + p[P_SPINTOL] - b[6]
     g[EV_POLE] = den - p[P_DEN_EPS]
+    g[EV_VDOT_PEAK] = (9.0 * num * den + _series(p, P_NUM_V, P_NUM_LEN, v, lnv, b) * den
+                       - num * _series(p, P_DEN_V, P_DEN_LEN, v, lnv, b))
 
 
 @njit(RHS_SIG, cache=True)
@@ -370,6 +381,8 @@ def events_aligned(t, y, p, g):
     g[EV_SPIN1] = 1.0
     g[EV_SPIN2] = 1.0
     g[EV_POLE] = den - p[P_DEN_EPS]
+    g[EV_VDOT_PEAK] = (9.0 * num * den + eval_series0(p, P_NUM_V, int(p[P_NUM_LEN]), v, lnv) * den
+                       - num * eval_series0(p, P_DEN_V, int(p[P_DEN_LEN]), v, lnv))
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -407,11 +420,17 @@ def _vdot_series(E_raw, F_raw, kmax, approx):
 
 @njit(cache=True)
 def _store_series(N, D, Ep, basis, fold, p, v0):
-    """Store N, D, Ê′ (folded for the aligned RHS) and their lengths in p; return N, D, Ê′ at v0."""
+    """Store N, D, Ê′, v dN/dv, v dD/dv (folded for the aligned RHS) and the lengths in p; return N, D,
+    Ê′ and event 6 at v0."""
     p[P_NUM_LEN] = fold_and_store(N, basis, fold, p, P_NUM)
     p[P_DEN_LEN] = fold_and_store(D, basis, fold, p, P_DEN)
     p[P_EP_LEN] = fold_and_store(Ep, basis, fold, p, P_EP)
-    return eval_at(N, v0, basis), eval_at(D, v0, basis), eval_at(Ep, v0, basis)
+    Nv, Dv = v_derivative(N), v_derivative(D)
+    fold_and_store(Nv, basis, fold, p, P_NUM_V)
+    fold_and_store(Dv, basis, fold, p, P_DEN_V)
+    n0, d0 = eval_at(N, v0, basis), eval_at(D, v0, basis)
+    peak0 = 9.0 * n0 * d0 + eval_at(Nv, v0, basis) * d0 - n0 * eval_at(Dv, v0, basis)
+    return n0, d0, eval_at(Ep, v0, basis), peak0
 
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
@@ -422,8 +441,8 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
     invariants for the aligned/nonspinning right-hand side (folded into the series), or None for the
     precessing one.  ``series``: (N, D, Ê′) from :func:`vdot_series` if already computed.
-    With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′) at v_check)
-    instead of p, for checking the initial point.
+    With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′, event 6) at
+    v_check) instead of p, for checking the initial point.
     """
     from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms,
                              spin_orbit_precession, spin_spin_precession_2pn, spin_spin_precession_3pn,
