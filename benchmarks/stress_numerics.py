@@ -353,7 +353,8 @@ def generator_half_pi_runs(offsets=(0.0, 1e-12, 1e-6), methods=METHODS):
 def parallel_reset_probe():
     """The generator from |r| = π/2 with ω = ê ∥ r over [0, 10π + 1], DOP853 called directly to see the raw
     state: ṙ = ω/2 is constant, steps grow ×6 each, and a step spanning several half-turns is followed
-    by one reset → (resets, crossings of |r| = π/2, largest |r| after a reset, δ at the end, longest step)."""
+    by one reset, which subtracts the nearest multiple of π → (resets, crossings of |r| = π/2, largest |r|
+    after a reset, δ at the end, longest step)."""
     omega = AxisOmega(CONSTANT)
     R0 = np.array([0.0, *AXIS])
     form = F.get("generator")
@@ -418,8 +419,8 @@ def branch_cases(quick):
     resets, crossings, r_max, delta, h_max = parallel_reset_probe()
     yield dict(area="c. branches", case="generator from |r| = π/2 with ω = ê ∥ r over [0, 10π + 1] (ṙ = ω/2: "
                f"exactly linear, the last step is {h_max:.1f} long), DOP853 on the raw state", tried=1, crashes=0,
-               outcome=f"{resets} resets for {crossings} crossings of |r| = π/2: one reset per step, so |r| stays "
-               f"up to {r_max:.2f} > π/2 after a step spanning several half-turns; δ at t_end {delta:.1e}",
+               outcome=f"{resets} resets for {crossings} crossings of |r| = π/2 (one per step, of the nearest "
+               f"multiple of π): |r| ≤ {r_max:.4f} after every step; δ at t_end {delta:.1e}",
                worst_error=delta, growth="—")
     distances = (0.0, 1e-15, 1e-12, 1e-8, 1e-4)
     probes = [generator_derivative_along_axis(d) for d in distances]

@@ -154,6 +154,20 @@ def test_generator_reset(theta):
         assert np.array_equal(y, r)
 
 
+@pytest.mark.parametrize("theta", [3 * math.pi / 2 - 1e-9, 3 * math.pi / 2, 5.0, 8.35, 10 * math.pi + 0.3, 40.0])
+def test_generator_reset_beyond_three_half_pi(theta):
+    """A step that ends past 3π/2 (possible where ṙ stays bounded through |r| = π, ω ∥ r) is brought back to
+    |r| ≤ π/2 by subtracting the nearest multiple nπ: the same rotation, rotor (−1)ⁿ exp(r)."""
+    axis = np.array([0.3, -0.8, 0.52])
+    r = theta * axis / np.linalg.norm(axis)
+    y = r.copy()
+    assert F.generator_reset(0.0, y, np.zeros(0))
+    assert np.linalg.norm(y) <= math.pi / 2 * (1 + 1e-15)
+    n = round((theta - y @ axis / np.linalg.norm(axis)) / math.pi)   # y = r − nπ r/|r|
+    assert n == round(theta / math.pi) or theta == 3 * math.pi / 2
+    assert np.allclose(quat.exp(y), (-1) ** n * quat.exp(r), rtol=0, atol=4e-15 * theta)
+
+
 def test_generator_reset_at_exactly_half_pi_reverses_r():
     r = np.array([0.0, math.pi / 2, 0.0])
     y = r.copy()

@@ -11,7 +11,7 @@ name                   state  equations
 ``rotor``              4      dR/dt = ½ ω R, R unnormalized (eq:integrate-spinor)
 ``generator``          3      ṙ of R = exp(r) (eq:log_deriv_omega), with the reset
                               r → r − π r/|r| after each accepted step with |r| ≥ π/2
-                              (eq:generator_reset)
+                              (eq:generator_reset; the nearest multiple of π if |r| ≥ 3π/2)
 ``generator-noreset``  3      the same equation without the reset
 ``vectors3``           9      dfᵢ/dt = ω × fᵢ for the three frame vectors (eq:integr-frame-vectors)
 ``vectors2``           6      the same for f₀, f₁; f₂ = f₀ × f₁
@@ -145,11 +145,16 @@ def damped_vectors_derivative(w, y, p, dydt):
 
 @njit(AFTER_STEP_SIG, cache=True)
 def generator_reset(t, y, p):
-    """r → r − π r/|r| when |r| ≥ π/2 (eq:generator_reset); the same rotation, exp of it is −exp(r)."""
+    """r → r − nπ r/|r| with n = round(|r|/π) when |r| ≥ π/2: the same rotation, exp of it is (−1)ⁿ exp(r).
+
+    The paper's reset (eq:generator_reset) is n = 1, which is enough for |r| < 3π/2 at the end of a step.
+    A step can end beyond that where ṙ stays bounded through |r| = π (ω ∥ r: ṙ = ω/2), and one
+    subtraction of π then left |r| = 5.2 (measured, benchmarks/stress_numerics.py); the nearest multiple
+    brings every step back to |r| ≤ π/2."""
     th = np.sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2])
     if th < 0.5 * np.pi:
         return False
-    k = 1.0 - np.pi / th
+    k = 1.0 - np.pi * np.floor(th / np.pi + 0.5) / th
     y[0] *= k
     y[1] *= k
     y[2] *= k
