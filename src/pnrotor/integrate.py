@@ -89,7 +89,8 @@ def integrate_angular_velocity(omega, t_span, R0, formulation="rotor", method="D
         One of :data:`pnrotor.formulations.FORMULATIONS`: 'rotor', 'generator', 'generator-noreset',
         'vectors3', 'vectors2', 'vectors-damped'.
     method : str
-        'DOP853' or 'Bulirsch-Stoer' ('BS'), case-insensitive.
+        'DOP853' or 'Bulirsch-Stoer' ('BS'), case-insensitive.  Bulirsch–Stoer needs a smooth ω: across a
+        jump or kink it can return a wrong answer with no warning (:mod:`pnrotor.ode.bulirsch_stoer`).
     atol, rtol : float
         Tolerances on each state component (the paper uses rtol = 0, Sec. V-A).
     t_eval : None or array_like
