@@ -117,10 +117,11 @@ def no_temporaries(folder):
 # --------------------------------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("checksum", [False, True])
 @pytest.mark.parametrize("compression", [None, "gzip", "lzf"])
-def test_frame_history_round_trip_is_bitwise(tmp_path, compression):
+def test_frame_history_round_trip_is_bitwise(tmp_path, compression, checksum):
     history = frame_history(n=300_001)  # several chunks
-    path = hdf5.write(tmp_path / "run.h5", history, compression=compression)
+    path = hdf5.write(tmp_path / "run.h5", history, compression=compression, checksum=checksum)
     assert path == tmp_path / "run.h5"
     back = hdf5.read(path)
     assert isinstance(back, FrameHistory)
@@ -176,10 +177,10 @@ def histories(draw):
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(histories(), st.sampled_from([None, "gzip", "lzf"]))
-def test_generated_histories_round_trip_bitwise(history, compression):
+@given(histories(), st.sampled_from([None, "gzip", "lzf"]), st.booleans())
+def test_generated_histories_round_trip_bitwise(history, compression, checksum):
     with tempfile.TemporaryDirectory() as folder:
-        path = hdf5.write(Path(folder) / "h.h5", history, compression=compression)
+        path = hdf5.write(Path(folder) / "h.h5", history, compression=compression, checksum=checksum)
         assert_identical(history, hdf5.read(path))
 
 
@@ -206,7 +207,7 @@ def test_attributes_and_datasets_are_complete(tmp_path):
         assert np.array_equal(f["inputs/R0"][()], [1.0, 0, 0, 0])
         for name, shape in [("t", (101,)), ("R", (101, 4))]:
             assert f[name].shape == shape and f[name].dtype == np.float64
-            assert f[name].chunks is not None and f[name].fletcher32
+            assert f[name].chunks is not None and not f[name].fletcher32  # checksums are an option
             assert (f[name].compression, f[name].compression_opts, f[name].shuffle) == ("gzip", 1, True)
             assert f[name].attrs["units"] == hdf5.UNITS["FrameHistory"][name]
         assert "scalar-first" in f["R"].attrs["units"]
@@ -227,10 +228,12 @@ def test_evolution_datasets_carry_units(tmp_path, evolution_kind):
         assert set(hdf5.UNITS["Evolution"]) <= set(f)
 
 
-def test_large_arrays_are_chunked_without_padding(tmp_path):
-    hdf5.write(tmp_path / "run.h5", frame_history(n=1_000_001))
+@pytest.mark.parametrize("compression, checksum", [("lzf", False), (None, True), ("gzip", True)])
+def test_large_arrays_are_chunked_without_padding(tmp_path, compression, checksum):
+    hdf5.write(tmp_path / "run.h5", frame_history(n=1_000_001), compression=compression, checksum=checksum)
     with h5py.File(tmp_path / "run.h5", "r") as f:
         for name in ("t", "R"):
+            assert f[name].fletcher32 == checksum and f[name].compression == compression
             rows, chunk = f[name].shape[0], f[name].chunks[0]
             nchunks = -(-rows // chunk)
             assert chunk * f[name].dtype.itemsize * np.prod(f[name].shape[1:]) <= 1 << 20
@@ -595,17 +598,92 @@ def test_truncated_file_is_reported(tmp_path, keep):
         hdf5.read(path)
 
 
-@pytest.mark.parametrize("compression", [None, "gzip"])
-def test_damaged_data_is_reported(tmp_path, compression):
-    path = hdf5.write(tmp_path / "run.h5", frame_history(n=20_001), compression=compression)
+def flip_a_byte(path, dataset, at=100):
+    """Flip a bit of byte `at` of the stored bytes of `dataset` (its first chunk if chunked); return the
+    index of the element it lies in."""
     with h5py.File(path, "r") as f:
-        assert f["R"].fletcher32
-        offset = f["R"].id.get_chunk_info(0).byte_offset + 100
+        d = f[dataset]
+        offset = d.id.get_chunk_info(0).byte_offset if d.chunks else d.id.get_offset()
+        shape = d.shape
     data = bytearray(path.read_bytes())
-    data[offset] ^= 0x10
+    data[offset + at] ^= 0x10
     path.write_bytes(data)
+    return np.unravel_index(at // 8, shape)
+
+
+@pytest.mark.parametrize("compression", [None, "gzip", "lzf"])
+def test_damaged_data_is_reported_with_checksums(tmp_path, compression):
+    path = hdf5.write(tmp_path / "run.h5", frame_history(n=20_001), compression=compression, checksum=True)
+    with h5py.File(path, "r") as f:
+        assert f["R"].fletcher32 and f["t"].fletcher32
+    flip_a_byte(path, "R")
     with pytest.raises(ValueError, match="is corrupt: HDF5 cannot read it"):
         hdf5.read(path)
+
+
+def test_without_checksums_arrays_are_contiguous_and_damage_goes_unnoticed(tmp_path):
+    """The default layout: contiguous datasets, the array's own bytes, no checksum; a flipped byte then
+    reads back as a changed number (what ``checksum=True`` is for)."""
+    history = frame_history(n=20_001)
+    path = hdf5.write(tmp_path / "run.h5", history)
+    with h5py.File(path, "r") as f:
+        for name in ("t", "R"):
+            assert f[name].chunks is None and not f[name].fletcher32 and f[name].compression is None
+    assert_identical(hdf5.read(path), history)
+    where = flip_a_byte(path, "R")
+    damaged = hdf5.read(path).R
+    assert damaged[where] != history.R[where]
+    damaged[where] = history.R[where]
+    assert damaged.tobytes() == history.R.tobytes()
+
+
+def test_checksum_option_of_batches_and_appends(tmp_path):
+    with hdf5.batch(tmp_path / "batch.h5", checksum=True) as runs:
+        runs.add("a", frame_history())
+    hdf5.write(tmp_path / "batch.h5", frame_history(message="b"), group="b")  # appended without checksums
+    hdf5.write(tmp_path / "batch.h5", frame_history(message="c"), group="c", checksum=True)
+    with h5py.File(tmp_path / "batch.h5", "r") as f:
+        assert [f[f"{name}/R"].fletcher32 for name in "abc"] == [True, False, True]
+    assert hdf5.read(tmp_path / "batch.h5", group="b").message == "b"
+    with pytest.raises(TypeError, match="checksum must be True or False"):
+        hdf5.write(tmp_path / "x.h5", frame_history(), checksum="fletcher32")
+    with pytest.raises(TypeError, match="checksum must be True or False"):
+        with hdf5.batch(tmp_path / "x.h5", checksum=1):
+            pass
+    assert sorted(os.listdir(tmp_path)) == ["batch.h5"]
+
+
+def test_files_of_the_former_layout_still_read(tmp_path):
+    """Before checksums became an option every dataset was chunked with Fletcher-32 (what
+    ``checksum=True`` writes); such a file, built here with plain h5py, reads back bitwise."""
+    history = frame_history(n=1001)
+    hdf5.write(tmp_path / "run.h5", history)
+    with h5py.File(tmp_path / "run.h5", "r") as new, h5py.File(tmp_path / "old.h5", "w") as old:
+        for name, value in new.attrs.items():
+            old.attrs[name] = value
+        new.copy("inputs", old)
+        for name in ("t", "R"):
+            d = old.create_dataset(name, data=new[name][...], chunks=(500,) + new[name].shape[1:], fletcher32=True)
+            d.attrs["units"] = new[name].attrs["units"]
+    assert_identical(hdf5.read(tmp_path / "old.h5"), history)
+
+
+def test_durable_write_starts_the_writeback_of_large_datasets(tmp_path, monkeypatch):
+    """Each dataset of ≥ 1 MiB starts a background fdatasync of the temporary file (none when not
+    durable); the final fsync of the file and its folder stay, and an interrupted write leaves nothing."""
+    started, synced = [], []
+    monkeypatch.setattr(hdf5, "_fsync_data", started.append)
+    monkeypatch.setattr(hdf5, "_fsync", synced.append)
+    hdf5.write(tmp_path / "big.h5", frame_history(n=200_000))  # t: 1.6 MB, R: 6.4 MB
+    assert 1 <= len(started) <= 2 and {p.name for p in started} == {synced[0].name}
+    assert TEMPORARY.match(synced[0].name) and synced[1:] == [tmp_path]
+    with hdf5.batch(tmp_path / "scratch.h5", durable=False) as runs:
+        runs.add("a", frame_history(n=200_000))
+    assert len(started) <= 2 and len(synced) == 2 and not hdf5._WRITEBACKS
+    fail_on_dataset(monkeypatch, "R")
+    with pytest.raises(KeyboardInterrupt):
+        hdf5.write(tmp_path / "big.h5", frame_history(n=200_000), overwrite=True)
+    assert sorted(os.listdir(tmp_path)) == ["big.h5", "scratch.h5"] and not hdf5._WRITEBACKS
 
 
 def test_non_hdf5_and_empty_files(tmp_path):
