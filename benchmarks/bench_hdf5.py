@@ -12,19 +12,29 @@ of --samples samples each, computed by pnrotor:
   136 MB at 10⁶).
 
 Compute time is that call, warm (numba's code loaded and a first call made). Each run is written without
-compression, with gzip and with lzf (the write time includes fsync and the atomic rename) and read back
-with `pnrotor.hdf5.read`. Every time is the best of --repeat; the table gives the ratios write/compute and
-read/compute (below 1: the acceptance holds). The files go to a temporary folder under --dir (default:
-waveforms/, the real output folder, so the disk is the one real runs write to).
+compression, with gzip and with lzf, each without checksums (the default) and with ``checksum=True``
+(the write time includes fsync and the atomic rename) and read back with `pnrotor.hdf5.read`. Every time
+is the best of --repeat; the table gives the ratios write/compute and read/compute (below 1: the
+acceptance holds). The files go to a temporary folder under --dir (default: waveforms/, the real output
+folder, so the disk is the one real runs write to).
 
-    python benchmarks/bench_hdf5.py [--samples 1000000] [--repeat 3] [--dir waveforms]
+A second table breaks an uncompressed write of each run down: plain h5py writing the same arrays
+(contiguous or chunked as `pnrotor.hdf5` chunks them, with and without Fletcher-32, at three chunk sizes,
+with and without an fsync at the end) and `pnrotor.hdf5.write` with and without checksums. The variants
+are interleaved in random order, --repeat rounds, best and median kept (the machine may be shared).
+
+    python benchmarks/bench_hdf5.py [--samples 1000000] [--repeat 3] [--dir waveforms] [--no-breakdown]
 """
 
 import argparse
+import os
+import random
+import statistics
 import tempfile
 import time
 from pathlib import Path
 
+import h5py
 import numpy as np
 
 import pnrotor
@@ -58,34 +68,97 @@ def best_time(function, repeat):
     return min(times), result
 
 
+def h5py_write(arrays, chunk_bytes=None, fletcher32=False, fsync=False):
+    """A function writing `arrays` with plain h5py to a path: contiguous, or in chunks of at most
+    `chunk_bytes` along the first axis (equal, as `pnrotor.hdf5` makes them), fsynced if `fsync`."""
+    def write(path):
+        with h5py.File(path, "w") as f:
+            for name, array in arrays.items():
+                options = {}
+                if chunk_bytes:
+                    rows = array.shape[0]
+                    nchunks = -(-rows * array.itemsize * (array.size // rows) // chunk_bytes)
+                    options = dict(chunks=(-(-rows // nchunks),) + array.shape[1:], fletcher32=fletcher32)
+                f.create_dataset(name, data=array, **options)
+        if fsync:
+            fd = os.open(path, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+    return write
+
+
+def breakdown(name, run, folder, repeat):
+    """Print where an uncompressed write of `run` goes: the variants interleaved, best and median."""
+    arrays = {key: value for key, value in vars(run).items() if isinstance(value, np.ndarray)}
+    copies = [key for key, value in arrays.items() if not (value.flags.c_contiguous and value.dtype == np.float64)]
+    MiB = 1 << 20
+    variants = {
+        "h5py contiguous, no fsync": h5py_write(arrays),
+        "h5py contiguous + fsync": h5py_write(arrays, fsync=True),
+        "h5py chunks 1 MiB, no fsync": h5py_write(arrays, MiB),
+        "h5py chunks 256 KiB + fletcher32, no fsync": h5py_write(arrays, MiB // 4, True),
+        "h5py chunks 1 MiB + fletcher32, no fsync": h5py_write(arrays, MiB, True),
+        "h5py chunks 4 MiB + fletcher32, no fsync": h5py_write(arrays, 4 * MiB, True),
+        "h5py chunks 1 MiB + fletcher32 + fsync": h5py_write(arrays, MiB, True, fsync=True),
+        "pnrotor.hdf5.write (contiguous, fsync)": lambda path: hdf5.write(path, run, overwrite=True),
+        "pnrotor.hdf5.write checksum=True": lambda path: hdf5.write(path, run, overwrite=True, checksum=True),
+    }
+    times = {variant: [] for variant in variants}
+    for _ in range(repeat):
+        for i, variant in random.sample(list(enumerate(variants)), len(variants)):
+            path = Path(folder) / f"breakdown-{i}.h5"
+            path.unlink(missing_ok=True)
+            start = time.perf_counter()
+            variants[variant](path)
+            times[variant].append(time.perf_counter() - start)
+    layout = "all C-contiguous float64, passed to HDF5 unconverted" if not copies else f"converted: {copies}"
+    print(f"\n{name}: uncompressed write, {sum(a.nbytes for a in arrays.values()) / 1e6:.1f} MB in {len(arrays)} "
+          f"arrays ({layout}), {repeat} interleaved rounds")
+    print(f"{'variant':<44} {'best s':>7} {'median s':>8}")
+    for variant, measured in times.items():
+        print(f"{variant:<44} {min(measured):7.3f} {statistics.median(measured):8.3f}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=int, default=10**6, help="samples per run (default: 10⁶)")
     parser.add_argument("--repeat", type=int, default=3, help="time each step this many times, keep the best")
     parser.add_argument("--dir", default=str(Path(__file__).resolve().parents[1] / "waveforms"),
                         help="folder for the temporary files (default: waveforms/)")
+    parser.add_argument("--no-breakdown", action="store_true", help="skip the table of write variants")
     args = parser.parse_args()
     if args.samples < 2 or args.repeat < 1:
         parser.error("--samples must be ≥ 2 and --repeat ≥ 1")
 
     print(f"--samples {args.samples}, best of {args.repeat}, files in a temporary folder under {args.dir}")
-    header = (f"{'run':<13} {'samples':>8} {'compute s':>9} {'compression':<11} {'data MB':>8} {'file MB':>8} "
+    header = (f"{'run':<13} {'samples':>8} {'compute s':>9} {'compression':<11} {'checksum':<8} {'data MB':>8} "
+              f"{'file MB':>8} "
               f"{'write s':>8} {'read s':>8} {'write/compute':>13} {'read/compute':>12}")
     print(header)
+    runs = {}
     with tempfile.TemporaryDirectory(dir=args.dir, prefix="bench_hdf5.") as folder:
         for name, make in (("FrameHistory", frame_history), ("Evolution", evolution)):
             compute = make(args.samples)
             compute()  # warm: numba's code loaded, first-call dispatch done
             computing, run = best_time(compute, args.repeat)
             data = sum(value.nbytes for value in vars(run).values() if isinstance(value, np.ndarray)) / 1e6
-            for compression in hdf5.COMPRESSIONS:
-                path = Path(folder) / f"{name}-{compression}.h5"
-                writing, _ = best_time(lambda: hdf5.write(path, run, compression=compression, overwrite=True),
-                                       args.repeat)
-                reading, _ = best_time(lambda: hdf5.read(path), args.repeat)
-                size = path.stat().st_size / 1e6
-                print(f"{name:<13} {run.t.size:>8} {computing:9.3f} {str(compression):<11} {data:8.1f} {size:8.1f} "
-                      f"{writing:8.3f} {reading:8.3f} {writing / computing:13.2f} {reading / computing:12.2f}")
+            runs[name] = run
+            for checksum in (False, True):
+                for compression in hdf5.COMPRESSIONS:
+                    path = Path(folder) / f"{name}-{compression}-{checksum}.h5"
+                    writing, _ = best_time(lambda: hdf5.write(path, run, compression=compression, checksum=checksum,
+                                                              overwrite=True), args.repeat)
+                    reading, _ = best_time(lambda: hdf5.read(path), args.repeat)
+                    size = path.stat().st_size / 1e6
+                    print(f"{name:<13} {run.t.size:>8} {computing:9.3f} {str(compression):<11} "
+                          f"{'yes' if checksum else 'no':<8} {data:8.1f} {size:8.1f} {writing:8.3f} {reading:8.3f} "
+                          f"{writing / computing:13.2f} {reading / computing:12.2f}")
+                    path.unlink()
+        if not args.no_breakdown:
+            for name, run in runs.items():
+                breakdown(name, run, folder, max(args.repeat, 5))
 
 
 if __name__ == "__main__":
