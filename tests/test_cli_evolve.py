@@ -106,7 +106,11 @@ def test_output_option_and_compression(tmp_path, capsys):
     assert_same_run(hdf5.read(path), pnrotor.evolve(**FAST_KW))
     assert evolve(capsys, *FAST, "-o", path, "--overwrite", "--compression", "gzip")[0] == 0
     with h5py.File(path) as f:
-        assert f["R"].compression == "gzip"
+        assert f["R"].compression == "gzip" and not f["R"].fletcher32
+    assert evolve(capsys, *FAST, "-o", path, "--overwrite", "--checksum")[0] == 0
+    with h5py.File(path) as f:
+        assert f["R"].fletcher32 and f["v"].fletcher32 and f["R"].compression is None
+    assert_same_run(hdf5.read(path), pnrotor.evolve(**FAST_KW))
     assert os.listdir(tmp_path) == ["run.h5"]
 
 
@@ -407,7 +411,8 @@ def test_parallel_batch_equals_serial_bitwise(method, in_tmp, capsys, monkeypatc
     write_text(in_tmp / "many.csv", "\n".join(rows) + "\n")
     code, out_serial, _ = evolve(capsys, "--batch", "many.csv", "--jobs", "1", "-o", "serial.h5")
     assert code == 1 and "on this process" in out_serial
-    code, out_pool, _ = evolve(capsys, "--batch", "many.csv", "--jobs", "2", "--compression", "lzf")  # to waveforms/
+    code, out_pool, _ = evolve(capsys, "--batch", "many.csv", "--jobs", "2", "--compression", "lzf",
+                               "--checksum")  # to waveforms/
     assert code == 1 and "on 2 worker processes" in out_pool
     assert "FAILED row 11 (line 12) (T4_m10_m10_chi1-0,0,2_chi2-0,0,0_f100): |chi1| = 2.0 exceeds 1" in out_pool
     pool = in_tmp / "waveforms" / "many.h5"
@@ -415,8 +420,9 @@ def test_parallel_batch_equals_serial_bitwise(method, in_tmp, capsys, monkeypatc
     assert len(names) == 10 and hdf5.list_runs(pool) == names
     for name in names:
         assert_same_run(hdf5.read(pool, name), hdf5.read(in_tmp / "serial.h5", name))
-    with h5py.File(pool) as f:
-        assert f[names[0]]["t"].compression == "lzf"
+    with h5py.File(pool) as f, h5py.File(in_tmp / "serial.h5") as g:
+        assert f[names[0]]["t"].compression == "lzf" and f[names[0]]["t"].fletcher32  # kept by the parts' copy
+        assert g[names[0]]["t"].compression is None and not g[names[0]]["t"].fletcher32
     # the same lines, in row order, whichever worker finished first
     strip = lambda out: [line.split(": ", 1)[0] for line in out.splitlines()[1:-1]]  # noqa: E731
     assert strip(out_pool) == strip(out_serial)
