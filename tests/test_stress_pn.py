@@ -6,6 +6,7 @@ Every run is checked by :func:`check`: finite outputs, a documented termination 
 of pnrotor.pn.evolve), |χᵢ| conserved, R unit and finite, v increasing."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -56,9 +57,17 @@ def test_start_between_pole_guard_and_pole(approximant, past):
 @pytest.mark.parametrize("chi", [[0, 0, 0], [0.6, 0.0, 0.3], [0, 0, -0.99]])
 @pytest.mark.parametrize("f_ref", [300.0, 500.0, 1000.0])
 def test_f_ref_beyond_the_inspiral_is_a_value_error(approximant, chi, f_ref):
-    """30 + 30 M☉: the inspiral ends near 50–185 Hz (measured), so these f_ref are all past it."""
-    with pytest.raises(ValueError, match="f_ref"):
+    """30 + 30 M☉: the inspiral ends near 50–185 Hz (measured), so these f_ref are all past it.  The error
+    gives the bound (pnrotor.pn.system.inspiral_end, a grid and bisection of the series in numpy); for
+    nonspinning and aligned spins it is where the integrated run from 20 Hz ends (events located by DOP853),
+    and just below it a run starts."""
+    with pytest.raises(ValueError, match="f_ref") as info:
         evolve(30, 30, chi, [0, 0, 0], f_ref, approximant=approximant)
+    bound = float(re.search(r"f_ref must be below (\S+) Hz", str(info.value)).group(1))
+    end = evolve(30, 30, chi, [0, 0, 0], 20.0, approximant=approximant, sampling="final")
+    if chi[0] == 0.0:
+        assert bound == pytest.approx(end.f_gw[-1], rel=1e-5)
+    check(evolve(30, 30, chi, [0, 0, 0], bound * (1 - 1e-5), approximant=approximant, sampling="final"), chi, [0, 0, 0])
 
 
 @pytest.mark.parametrize("approximant", ["T1", "T4", "T5"])

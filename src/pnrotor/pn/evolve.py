@@ -17,7 +17,8 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 * ``'f_max'`` / ``'f_min'`` — v reached the requested end frequency;
 * ``'v_max'`` — v reached 1 (no f_max given and nothing else stopped the inspiral first);
 * ``'energy_balance'`` — E′(v) ≥ 0: the binding energy no longer decreases with v;
-* ``'vdot_nonpositive'`` — v̇ ≤ 0 (T4: the re-expanded flux ratio vanishes);
+* ``'vdot_nonpositive'`` — v̇ ≤ 0; a safety net: where N or D of v̇ = K v⁹N/D falls to zero, event 6
+  or the pole guard fires first, so only a change of the spins could end a run here;
 * ``'vdot_peak'`` — ∂v̇/∂v ≤ 0 at the current spins: v̇ stopped increasing with v, so the inspiral no
   longer accelerates (LALSuite's d²ω/dt² ≤ 0; the well-defined end where T4's flux ratio approaches
   a root and v would creep towards it forever, :mod:`pnrotor.pn.system` event 6);
@@ -446,19 +447,16 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         rotor=rotor, phase_shift=precession_phase_shift, aligned_basis=bvals if use_aligned else None,
         omega_l="varpi" if precession == "averaged_varpi" else "torque", basis=bvals, v_check=v0)
 
-    # ---- validity at f_ref -------------------------------------------------------------------------
-    if not e0 > 0.0:
-        raise ValueError(f"f_ref = {f_ref} Hz is too high: E'(v) >= 0 at v = {v0:.4g}, the PN energy balance is "
-                         f"invalid there; choose a lower f_ref")
-    if not n0 * d0 > 0.0:
-        raise ValueError(f"f_ref = {f_ref} Hz is too high: dv/dt <= 0 at v = {v0:.4g} for {approximant}; "
-                         f"choose a lower f_ref")
-    if not d0 > _sys.DEN_EPS:   # past the pole guard (event 5 only fires on crossing it): the run would hit the pole
-        raise ValueError(f"f_ref = {f_ref} Hz is too high: the denominator of dv/dt for {approximant} is {d0:.3g} <= "
-                         f"{_sys.DEN_EPS:g} at v = {v0:.4g}, next to its pole (dv/dt -> inf); choose a lower f_ref")
-    if not peak0 > 0.0:   # past the peak of dv/dt (event 6 only fires on crossing it)
-        raise ValueError(f"f_ref = {f_ref} Hz is too high: dv/dt no longer increases with v at v = {v0:.4g} for "
-                         f"{approximant} (past the end of the inspiral); choose a lower f_ref")
+    # ---- validity at f_ref: the terminal events only fire on crossing zero, so none may start at or below it
+    why = ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
+           else "dv/dt <= 0" if not n0 * d0 > 0.0
+           else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS
+           else "dv/dt no longer increases with v" if not peak0 > 0.0 else None)
+    if why:
+        v_end = _sys.inspiral_end(X1, approximant, kmax, bvals, kappa1, kappa2)
+        raise ValueError(f"f_ref = {f_ref} Hz is past the end of the {approximant} inspiral: {why} at v = {v0:.4g}; "
+                         f"for these masses and spins f_ref must be below "
+                         f"{_ini.frequency_from_v(v_end, M_sec):.6g} Hz (v = {v_end:.6g})")
 
     inputs = {
         "m1_Msun": m1, "m2_Msun": m2, "chi1": c1.tolist(), "chi2": c2.tolist(), "f_ref_Hz": f_ref,

@@ -46,7 +46,8 @@ It exists to measure the difference between the two conventions (tests); it must
 
 Events (all terminal), filled by :func:`events_precessing` / :func:`events_aligned`:
   0: v − v_end (requested end frequency, or v_max);   1: Ê′ (E′ = −νvÊ′ ≥ 0 ⇔ Ê′ ≤ 0);
-  2: N·D (sign of v̇);   3, 4: (1 + SPIN_TOL) − |χᵢ|²;
+  2: N·D (sign of v̇; a safety net: where N falls to zero event 6 fires first, where D does event 5,
+     so only the spins' evolution can bring v̇ to zero);   3, 4: (1 + SPIN_TOL) − |χᵢ|²;
   5: D − DEN_EPS: the denominator of v̇ (Ê′ for T1, the re-expanded Ê′/F̂ for T5; 1 for T4) about to
      vanish.  v̇ = K/D has a pole there with v* − v ∝ √(t* − t), which no step can cross; stopping at
      D = DEN_EPS = 1e-3 leaves t* − t ≈ DEN_EPS²/(2K|dD/dv|) ~ 1e-4 M (a phase of ~1e-5 rad) and
@@ -434,13 +435,13 @@ def _store_series(N, D, Ep, basis, fold, p, v0):
 
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
-                    rotor="coprecessing", phase_shift=False, aligned_basis=None, series=None,
+                    rotor="coprecessing", phase_shift=False, aligned_basis=None,
                     omega_l="torque", basis=None, v_check=None):
     """Build the parameter vector p.
 
     ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
     invariants for the aligned/nonspinning right-hand side (folded into the series), or None for the
-    precessing one.  ``series``: (N, D, Ê′) from :func:`vdot_series` if already computed.
+    precessing one.
     With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′, event 6) at
     v_check) instead of p, for checking the initial point.
     """
@@ -491,7 +492,7 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     p[P_SPINTOL] = SPIN_TOL
     p[P_DEN_EPS] = DEN_EPS
 
-    N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2) if series is None else series
+    N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2)
     fold = aligned_basis is not None
     b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
     at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
@@ -499,3 +500,29 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
 
 
 _UNIT_BASIS = np.array([1.0, 0, 0, 0, 0, 0, 0, 0, 0])
+
+
+def inspiral_end(X1, approximant, kmax, basis, kappa1=1.0, kappa2=1.0):
+    """The smallest v at which one of the events 1, 2, 5, 6 (module docstring) reaches zero with the spin
+    invariants fixed at ``basis``: where an inspiral from low frequency ends (for precessing spins, as far
+    as the spins at the start decide it), or 1.0 if none does below v = 1.  Found on a grid of 2000 values
+    of v in [10⁻³, 1] and refined by bisection to 1e-12."""
+    from .series import evaluate
+
+    N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2)
+    Nv, Dv = v_derivative(N), v_derivative(D)
+
+    def smallest(v):
+        n, d = evaluate(N, v, basis), evaluate(D, v, basis)
+        peak = 9.0 * n * d + evaluate(Nv, v, basis) * d - n * evaluate(Dv, v, basis)
+        return np.minimum.reduce([evaluate(Ep, v, basis), n * d, d - DEN_EPS, peak])
+
+    v = np.geomspace(1e-3, 1.0, 2000)
+    bad = np.flatnonzero(smallest(v) <= 0.0)
+    if bad.size == 0:
+        return 1.0
+    lo, hi = v[bad[0] - 1], v[bad[0]]
+    while hi - lo > 1e-12:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if smallest(np.array([mid]))[0] <= 0.0 else (mid, hi)
+    return hi
