@@ -37,14 +37,12 @@ d. *backward*: the binary over [0, T] (T = 10⁶; --quick 10⁵) forward and bac
    every formulation × method, and backward from the exact R(T) against the exact rotor.
 
 ``cases(quick=False)`` yields one row per case (keys: area, case, tried, crashes, outcome,
-worst_error, growth) for benchmarks/stress.py; run this file to print the table alone:
+worst_error, growth) for benchmarks/stress.py, which prints the table:
 
-    python benchmarks/stress_numerics.py [--quick]
+    python benchmarks/stress.py --only numerics [--quick]
 """
 
-import argparse
 import math
-import time
 
 import numpy as np
 from numba import njit
@@ -58,7 +56,6 @@ from pnrotor.ode.result import STATUS_MESSAGES
 
 FORMS = tuple(F.FORMULATIONS)
 METHODS = ("DOP853", "Bulirsch-Stoer")
-COLUMNS = ("area", "case", "tried", "crashes", "outcome", "worst_error", "growth")
 AXIS = np.array([1.0, 2.0, 2.0]) / 3.0
 R0_GENERIC = quat.normalize(np.array([0.8, -0.3, 0.4, 0.2]))
 
@@ -477,30 +474,10 @@ def backward_cases(quick):
 
 
 def cases(quick=False):
-    """Rows of the table (dicts with the keys of COLUMNS), computed lazily, case by case."""
+    """Rows of the table (dicts: area, case, tried, crashes, outcome, worst_error, growth), computed
+    lazily, case by case."""
     yield from long_run_cases(quick)
     yield from axis_cases(quick)
     yield from branch_cases(quick)
     yield from backward_cases(quick)
 
-
-def markdown(rows):
-    def cell(x):
-        return "—" if x is None else (f"{x:.2e}" if isinstance(x, float) else str(x).replace("|", "\\|"))
-    lines = ["| " + " | ".join(c.replace("_", " ") for c in COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
-    return "\n".join(lines + ["| " + " | ".join(cell(r[c]) for c in COLUMNS) + " |" for r in rows])
-
-
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="T = 10⁶ long runs, T = 10⁵ backward runs")
-    args = parser.parse_args(argv)
-    t0 = time.perf_counter()
-    rows = list(cases(quick=args.quick))
-    print(markdown(rows))
-    print(f"\n{len(rows)} cases, {sum(r['tried'] for r in rows)} runs, {sum(r['crashes'] for r in rows)} crashes, "
-          f"total wall time {time.perf_counter() - t0:.1f} s")
-
-
-if __name__ == "__main__":
-    main()
