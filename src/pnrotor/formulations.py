@@ -34,7 +34,7 @@ against 0.17 µs on the cached path, i.e. ~30× slower.
 
 Rotors returned by every formulation are unit and sign-continuous (:meth:`Formulation.rotors`).
 The rotor and unreset generator states are continuous, so their rotors are. The generator reset
-flips the sign of exp(r) (exp(r − π r/|r|) = −exp(r), eq:rotation_equivalence), and a frame defines
+may flip the sign of exp(r) (exp(r − nπ r/|r|) = (−1)ⁿ exp(r), eq:rotation_equivalence), and a frame defines
 its rotor only up to sign; for those formulations each sample's sign is chosen closest to the
 previous sample advanced by the midpoint rule, exp(½ ω(t_mid) Δt) R_prev (first-order Magnus). Plain
 nearest-sign alignment fails once the frame turns by more than a half turn between samples, which

@@ -105,11 +105,9 @@ def write(path, run, *, overwrite=False, compression=None, checksum=False, group
 
     ``checksum=True`` stores each array in chunks with a Fletcher-32 checksum (HDF5's filter, checked by
     every HDF5 reader): a damaged byte is then an error on reading (`ValueError` from `read`) instead of a
-    wrong number. It is off by default, measured: with it the uncompressed write of the 10⁶-sample
-    `Evolution` of benchmarks/bench_hdf5.py (136 MB, computed in 0.115 s / 0.101 s in two runs) took
-    0.125 s / 0.170 s, longer than computing it, without it 0.088 s / 0.084 s (reading 0.087 s / 0.108 s
-    and 0.049 s / 0.042 s); in plain h5py the chunking costs 0.02 s and Fletcher-32 0.035-0.07 s more
-    (docs/hdf5-schema.md). Without compression and checksums the arrays are
+    wrong number. It is off by default because with it the uncompressed write of the 10⁶-sample
+    `Evolution` of benchmarks/bench_hdf5.py takes longer than computing it, and without it less
+    (measurements in docs/hdf5-schema.md). Without compression and checksums the arrays are
     stored contiguous, HDF5 writing their own bytes. Files written either way (and older files, all chunked
     with checksums) read the same.
     """

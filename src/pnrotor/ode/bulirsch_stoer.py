@@ -34,7 +34,7 @@ Smooth right-hand sides only.  The extrapolation and its error estimate rest on 
 expansion of Gragg's rule, which a jump or a kink of f inside a step breaks: the estimate can then
 pass while T_{j,j} is wrong, and the run ends with status 0 and no warning.  Measured
 (benchmarks/stress.py, ω reversing sign at t = 10.3 or ω = |t − 10.3| ê, six formulations, atol 1e-10):
-max δ up to 0.3 across the jump and 3e-4 across the kink, where DOP853 stays within 1e-8.  Integrate
+max δ up to 0.3 across the jump and 3e-4 across the kink, where DOP853 stays within 1.1e-8.  Integrate
 up to the discontinuity and restart from there.
 """
 
