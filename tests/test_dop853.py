@@ -17,8 +17,8 @@ from numba import njit
 from scipy.integrate import DOP853, solve_ivp
 from scipy.linalg import expm
 
-from pnrotor.ode import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
-                         STATUS_SUCCESS, DenseOutput, dop853, tableau)
+from pnrotor.ode import (AFTER_STEP_SIG, EVENTS_SIG, RHS_SIG, STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE,
+                         STATUS_STEP_UNDERFLOW, STATUS_SUCCESS, DenseOutput, by_address, dop853, tableau)
 
 from ode_problems import (W, add_to_first, blow_up, kepler, kepler_exact, kepler_y0, linear, lotka_volterra,
                           nan_after_one, nan_always, never_modify, osc_events, osc_exact, oscillator, ramp,
@@ -331,6 +331,20 @@ def test_event_located_to_near_machine_precision():
     # the output ends at the event
     assert r.t[-1] == r.t_event
     np.testing.assert_array_equal(r.y[-1], r.y_event)
+
+
+def test_functions_by_address_give_the_same_run():
+    """by_address(f, sig) (the compiled address, for functions that cannot raise) integrates exactly as the
+    dispatcher f, events included; a function of another signature is refused."""
+    kw = dict(atol=1e-12, args=[W], n_events=2, dense=True)
+    a = dop853(oscillator, 0.0, [1.0, 0.0], 10.0, events=osc_events, **kw)
+    b = dop853(by_address(oscillator, RHS_SIG), 0.0, [1.0, 0.0], 10.0, events=by_address(osc_events, EVENTS_SIG),
+               **kw)
+    assert a.status == b.status == STATUS_EVENT and a.nfev == b.nfev
+    np.testing.assert_array_equal(a.y, b.y)
+    np.testing.assert_array_equal(a.t, b.t)
+    with pytest.raises(TypeError, match="rhs must have the signature"):
+        dop853(by_address(never_modify, AFTER_STEP_SIG), 0.0, [1.0, 0.0], 10.0, atol=1e-12, args=[W])
 
 
 def test_event_direction_and_zero_at_start():

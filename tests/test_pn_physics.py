@@ -185,6 +185,26 @@ def test_vdot_peak_event_is_the_v_derivative_of_vdot(approximant):
         assert g[system.EV_VDOT_PEAK] == pytest.approx(expected, rel=1e-7)
 
 
+def test_right_hand_sides_and_events_cannot_raise():
+    """Compiled with error_model='numpy', so evolve may pass them by address (an exception would be lost
+    there): at v = 0 and with R = 0 they give inf/nan, which the integrator reports as 'nonfinite', where
+    the default error model raises ZeroDivisionError."""
+    from pnrotor.pn import system
+    from pnrotor.pn.series import kmax_from_orders
+    p = system.make_parameters(0.5, "T1", kmax_from_orders(3.5, 3, 3), so_order=3.0, ss_order=3.0)
+    cases = ((system.rhs_aligned, system.events_aligned, np.array([0.0, 0.0])),
+             (system.rhs_precessing, system.events_precessing, np.concatenate(([0.0], [0.1] * 6, [0.0] * 4, [0.0]))),
+             (system.rhs_precessing_instantaneous, None, np.concatenate(([0.3], [0.1] * 6, [0.0] * 4, [0.0]))))
+    for rhs, events, y in cases:
+        d = np.empty(y.size)
+        rhs(0.0, y, p, d)
+        assert not np.all(np.isfinite(d))
+        if events is not None:
+            g = np.empty(system.N_EVENTS)
+            events(0.0, y, p, g)
+            assert not np.all(np.isfinite(g))
+
+
 def test_invalid_inputs():
     with pytest.raises(ValueError):
         evolve(10, 10, [0, 0, 1.2], [0, 0, 0], 20.0)

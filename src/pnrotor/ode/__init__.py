@@ -26,14 +26,14 @@ they are compiled once per machine (numba cache) and reused for every right-hand
 """
 
 from .bulirsch_stoer import bulirsch_stoer
-from .dop853 import (AFTER_STEP_SIG, EVENTS_SIG, RHS_SIG, dop853, no_after_step, no_events,
+from .dop853 import (AFTER_STEP_SIG, EVENTS_SIG, RHS_SIG, by_address, dop853, no_after_step, no_events,
                      select_initial_step)
 from .result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                      STATUS_SUCCESS, DenseOutput, OdeResult)
 
 __all__ = [
     "RHS_SIG", "AFTER_STEP_SIG", "EVENTS_SIG",
-    "dop853", "bulirsch_stoer", "OdeResult", "DenseOutput",
+    "dop853", "bulirsch_stoer", "by_address", "OdeResult", "DenseOutput",
     "no_after_step", "no_events", "select_initial_step",
     "STATUS_SUCCESS", "STATUS_EVENT", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW", "STATUS_NONFINITE",
 ]

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from ..ode import dop853
+from ..ode import EVENTS_SIG, RHS_SIG, by_address, dop853
 from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
 from . import initial as _ini
@@ -477,6 +477,8 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         rhs = _sys.rhs_precessing_instantaneous if precession == "instantaneous" else _sys.rhs_precessing
         events = _sys.events_precessing
         y0 = np.concatenate(([v0], c1, c2, R0, [0.0]))
+    # they cannot raise (error_model='numpy'), so they may go to the integrator by address
+    rhs, events = by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG)
 
     want_dense = mode in ("dt", "per_orbit")
     t_eval = "final" if mode == "final" else None

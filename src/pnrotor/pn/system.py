@@ -1,7 +1,10 @@
 r"""State layout, parameter vector and numba right-hand sides of the post-Newtonian system.
 
 Two specializations, each a top-level ``@njit(RHS_SIG, cache=True)`` function, so the DOP853 driver
-(which takes first-class functions of that signature) is compiled once per machine and cached:
+(which takes first-class functions of that signature) is compiled once per machine and cached.  The
+right-hand sides and event functions are compiled with ``error_model='numpy'``: they cannot raise (a
+division by zero gives inf or nan, which the integrator reports as ``'nonfinite'``), so
+:func:`~pnrotor.pn.evolve.evolve` passes them by address (:func:`pnrotor.ode.by_address`).
 
 * :func:`rhs_precessing` — state ``y = [v, χ₁(3), χ₂(3), R(4), Φ]`` (12 components);
 * :func:`rhs_aligned` — nonspinning and aligned spins, ``y = [v, Φ]``: ℓ̂ and the spins are constant,
@@ -173,7 +176,7 @@ def _vdot(p, v, b):
     return p[P_VDOT0] * v3 * v3 * v3 * num / _series(p, P_DEN, P_DEN_LEN, v, lnv, b)
 
 
-@njit(RHS_SIG, cache=True)
+@njit(RHS_SIG, cache=True, error_model="numpy")
 def rhs_precessing(t, y, p, dydt):
     """Right-hand side for the precessing state [v, χ₁, χ₂, R, Φ] (see module docstring)."""
     v = y[Y_V]
@@ -273,7 +276,7 @@ def rhs_precessing(t, y, p, dydt):
     dydt[Y_PHI] = phidot
 
 
-@njit(RHS_SIG, cache=True)
+@njit(RHS_SIG, cache=True, error_model="numpy")
 def rhs_precessing_instantaneous(t, y, p, dydt):
     """Right-hand side for [v, χ₁, χ₂, R, Φ] with the instantaneous precession (module docstring);
     R is the full orbital-frame rotor: n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹."""
@@ -337,7 +340,7 @@ def rhs_precessing_instantaneous(t, y, p, dydt):
     dydt[Y_PHI] = v3
 
 
-@njit(EVENTS_SIG, cache=True)
+@njit(EVENTS_SIG, cache=True, error_model="numpy")
 def events_precessing(t, y, p, g):
     """Event functions for the precessing state (module docstring)."""
     v = y[Y_V]
@@ -356,7 +359,7 @@ def events_precessing(t, y, p, g):
                        - num * _series(p, P_DEN_V, P_DEN_LEN, v, lnv, b))
 
 
-@njit(RHS_SIG, cache=True)
+@njit(RHS_SIG, cache=True, error_model="numpy")
 def rhs_aligned(t, y, p, dydt):
     """Right-hand side for nonspinning / aligned-spin runs, y = [v, Φ]; the spin invariants are folded
     into the b = 0 column of the series at setup (:func:`pnrotor.pn.series.fold_basis`)."""
@@ -369,7 +372,7 @@ def rhs_aligned(t, y, p, dydt):
     dydt[YA_PHI] = v3
 
 
-@njit(EVENTS_SIG, cache=True)
+@njit(EVENTS_SIG, cache=True, error_model="numpy")
 def events_aligned(t, y, p, g):
     """Event functions for the aligned state (events 3, 4 never fire: the spins are constant)."""
     v = y[YA_V]
