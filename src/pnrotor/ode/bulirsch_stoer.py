@@ -179,7 +179,6 @@ def _bs_core(rhs, after_step, t0, y0, t_end, p, atol, rtol, first_step, max_step
             h_abs = abs(h)
             nsteps += 1
 
-            reject = False
             nonfinite = False
             acc_col = -1
             h_next = h_abs
@@ -226,7 +225,6 @@ def _bs_core(rhs, after_step, t0, y0, t_end, p, atol, rtol, first_step, max_step
                         break
                     q = nseq[k_targ] * nseq[k_targ + 1] / (nseq[0] * nseq[0])
                     if err > q * q:
-                        reject = True
                         k_targ = j
                         if k_targ > 1 and work[k_targ - 1] < _ORDER_DOWN * work[k_targ]:
                             k_targ -= 1
@@ -238,7 +236,6 @@ def _bs_core(rhs, after_step, t0, y0, t_end, p, atol, rtol, first_step, max_step
                         break
                     q = nseq[j + 1] / nseq[0]
                     if err > q * q:
-                        reject = True
                         if k_targ > 1 and work[k_targ - 1] < _ORDER_DOWN * work[k_targ]:
                             k_targ -= 1
                         h_next = hopt[k_targ]
@@ -247,7 +244,6 @@ def _bs_core(rhs, after_step, t0, y0, t_end, p, atol, rtol, first_step, max_step
                     if err <= 1.0:
                         acc_col = j
                     else:
-                        reject = True
                         if k_targ > 1 and work[k_targ - 1] < _ORDER_DOWN * work[k_targ]:
                             k_targ -= 1
                         h_next = hopt[k_targ]
