@@ -128,9 +128,9 @@ def sweep(t_end, atols, repeat, damping, with_scipy):
     binary = PrecessingNutatingBinary()
     plan = [dict(formulation=f, method=m, atol=a, rtol=0.0, t_end=t_end, damping=damping, study="sweep")
             for f in FORMULATIONS for m in METHODS for a in atols]
-    if with_scipy:
+    if with_scipy:  # each scipy run right after pnrotor's at the same tolerances: the same machine state
         plan += [dict(formulation="rotor", method=m, atol=a, rtol=SCIPY_RTOL, t_end=t_end, damping=damping,
-                      study=study) for m, study in (("DOP853", "equal-rtol"), (SCIPY, "baseline")) for a in atols]
+                      study=study) for a in atols for m, study in (("DOP853", "equal-rtol"), (SCIPY, "baseline"))]
     probe_t = min(t_end, DAMPING_PROBE["t_end"])
     plan += [dict(formulation="vectors-damped", method=m, atol=DAMPING_PROBE["atol"], rtol=0.0, t_end=probe_t,
                   damping=(rate, rate), study="damping") for m in METHODS for rate in DAMPING_PROBE["rates"]]
