@@ -524,6 +524,8 @@ def inspiral_end(X1, approximant, kmax, basis, kappa1=1.0, kappa2=1.0):
     bad = np.flatnonzero(smallest(v) <= 0.0)
     if bad.size == 0:
         return 1.0
+    if bad[0] == 0:
+        return v[0]
     lo, hi = v[bad[0] - 1], v[bad[0]]
     while hi - lo > 1e-12:
         mid = 0.5 * (lo + hi)
