@@ -25,18 +25,24 @@ MTSUN_SI = _gm_sun_over_c3()
 """G M☉ / c³ in seconds."""
 
 
-def solar_masses(m, name="mass"):
-    """A mass in M☉ from a float (already M☉) or an astropy Quantity; must be finite and > 0."""
+def _positive(x, unit, name, what):
+    """A float from a float (already in `unit`) or an astropy Quantity converted to `unit` (an astropy unit
+    name); must be finite and > 0, else a ValueError "`name` must be a finite positive `what`"."""
     try:
         from astropy import units as u
-        if isinstance(m, u.Quantity):
-            m = m.to_value(u.M_sun)
+        if isinstance(x, u.Quantity):
+            x = x.to_value(getattr(u, unit))
     except ImportError:  # pragma: no cover - astropy is a dependency
         pass
-    m = float(m)
-    if not math.isfinite(m) or m <= 0.0:
-        raise ValueError(f"{name} must be a finite positive mass, got {m!r}")
-    return m
+    x = float(x)
+    if not math.isfinite(x) or x <= 0.0:
+        raise ValueError(f"{name} must be a finite positive {what}, got {x!r}")
+    return x
+
+
+def solar_masses(m, name="mass"):
+    """A mass in M☉ from a float (already M☉) or an astropy Quantity; must be finite and > 0."""
+    return _positive(m, "M_sun", name, "mass")
 
 
 def hertz(f, name="frequency", allow_none=False):
@@ -45,30 +51,12 @@ def hertz(f, name="frequency", allow_none=False):
         if allow_none:
             return None
         raise ValueError(f"{name} is required")
-    try:
-        from astropy import units as u
-        if isinstance(f, u.Quantity):
-            f = f.to_value(u.Hz)
-    except ImportError:  # pragma: no cover
-        pass
-    f = float(f)
-    if not math.isfinite(f) or f <= 0.0:
-        raise ValueError(f"{name} must be a finite positive frequency in Hz, got {f!r}")
-    return f
+    return _positive(f, "Hz", name, "frequency in Hz")
 
 
 def seconds(dt, name="time step"):
     """A time in seconds from a float or an astropy Quantity; must be finite and > 0."""
-    try:
-        from astropy import units as u
-        if isinstance(dt, u.Quantity):
-            dt = dt.to_value(u.s)
-    except ImportError:  # pragma: no cover
-        pass
-    dt = float(dt)
-    if not math.isfinite(dt) or dt <= 0.0:
-        raise ValueError(f"{name} must be a finite positive time in seconds, got {dt!r}")
-    return dt
+    return _positive(dt, "s", name, "time in seconds")
 
 
 def total_mass_seconds(m1, m2):
