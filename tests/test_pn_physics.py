@@ -306,11 +306,10 @@ def test_instantaneous_precession_is_the_averaged_one_plus_nutation():
 
 def test_output_kernel_matches_the_integrators_dense_output():
     """The sampling kernel's dense evaluation equals pnrotor.ode's DenseOutput at the same times."""
-    import sys
     from pnrotor.ode import dop853
+    from pnrotor.pn import sampling as ev
     from pnrotor.pn import system
     from pnrotor.pn.series import kmax_from_orders
-    ev = sys.modules["pnrotor.pn.evolve"]
     p = system.make_parameters(0.75, "T4", kmax_from_orders(3.5, 3, 3), so_order=3.0, ss_order=3.0)
     y0 = np.concatenate(([0.25], [0.5, 0.1, 0.3], [0.0, 0.4, -0.2], [1.0, 0.0, 0.0, 0.0], [0.0]))
     r = dop853(system.rhs_precessing, 0.0, y0, 3000.0, 1e-12, args=p, dense=True)

@@ -1,16 +1,21 @@
 r"""``evolve``: integrate the post-Newtonian system backward and forward from f_ref → :class:`Evolution`.
 
-One run:
+One run is four stages, each a function that the others (and later callers such as a batch of
+binaries or waveform modes) can compose:
 
-1. inputs → geometric units (:mod:`pnrotor.pn.initial`), t = 0 at the reference GW frequency f_ref,
-   Φ(0) = 0, n̂(0) = ``n_hat``, ℓ̂(0) = ``ell_hat``;
-2. choose the right-hand side: :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) for nonspinning
-   and aligned-spin binaries, :func:`~pnrotor.pn.system.rhs_precessing` (state
+1. :func:`pnrotor.pn.settings.settings`: inputs checked and in geometric units (:mod:`pnrotor.pn.initial`),
+   t = 0 at the reference GW frequency f_ref, Φ(0) = 0, n̂(0) = ``n_hat``, ℓ̂(0) = ``ell_hat``
+   → :class:`~pnrotor.pn.settings.Settings`;
+2. :func:`build_system`: the right-hand side — :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) for
+   nonspinning and aligned-spin binaries, :func:`~pnrotor.pn.system.rhs_precessing` (state
    [v, χ₁, χ₂, R, Φ]) otherwise or when ``integrate_rotor=True`` (or
-   :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with ``precession='instantaneous'``);
-3. integrate with DOP853 backward to f_min (if given) and forward to f_max or to termination, each
-   with terminal events; both halves share t = 0 and are stitched into one history;
-4. sample from the integrator's steps or its 7th-order dense output (never by shortening steps).
+   :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with ``precession='instantaneous'``) — its
+   events, parameter vector and initial state, and the check that f_ref is inside the inspiral
+   → :class:`System`;
+3. :func:`integrate_half`: DOP853 backward to f_min (if given) and forward to f_max or to termination,
+   each with terminal events; both halves share t = 0;
+4. :func:`pnrotor.pn.sampling.sample`: the two halves stitched into one history, from the integrator's
+   steps or its 7th-order dense output (never by shortening steps) → :class:`Evolution`.
 
 Termination reasons (``Evolution.termination`` for the forward half, ``stats['termination_backward']``):
 
@@ -32,19 +37,19 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 """
 
 import math
-import numbers
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
 from ..ode import EVENTS_SIG, RHS_SIG, by_address, dop853
 from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
 from . import initial as _ini
 from . import system as _sys
-from .series import MAX_ORDER, basis_values, kmax_from_orders
+from .sampling import sample
+from .series import basis_values, kmax_from_orders
+from .settings import normalize_approximant, settings
 
 TERMINATION_MESSAGES = {
     "f_max": "v reached the requested end frequency f_max",
@@ -61,9 +66,6 @@ TERMINATION_MESSAGES = {
     "time_limit": "the time bound of the integration was reached before any termination condition",
     "not_integrated": "this half was not integrated (no f_min given)",
 }
-
-MAX_SO_ORDER = 4.0
-MAX_SS_ORDER = 3.0
 
 CONTROLLER = dict(safety=0.85, max_factor=4.0)
 """DOP853 step-size controller for the inspiral.  With Hairer's defaults (0.9, 6) the accelerating chirp
@@ -119,67 +121,95 @@ class Evolution:
 
 
 # ---------------------------------------------------------------------------------------------------
-# helpers
+# stage 2: the specialized system
 # ---------------------------------------------------------------------------------------------------
 
-def normalize_approximant(approximant):
-    """'T1', 'T4' or 'T5' from 'Tn' (either case), 'TaylorTn' or 'SpinTaylorTn'; else a ValueError."""
-    a = str(approximant).strip()
-    for prefix in ("SpinTaylor", "Taylor"):
-        if a.startswith(prefix):
-            a = a[len(prefix):]
-    a = a.upper()
-    if a not in _sys.APPROXIMANTS:
-        raise ValueError(f"approximant must be one of T1, T4, T5 (or TaylorTn / SpinTaylorTn), got {approximant!r}")
-    return a
+@dataclass(eq=False)
+class System:
+    """The compiled problem of one run: right-hand side and events (by address, see
+    :func:`pnrotor.ode.by_address`), parameter vector ``p`` (:func:`pnrotor.pn.system.make_parameters`),
+    initial state ``y0``, and what the forward and backward halves need to stop: the PN truncation
+    ``kmax`` and spin invariants ``basis`` at f_ref (for the bound on f_ref in the error message)."""
+
+    rhs: object
+    events: object
+    p: np.ndarray
+    y0: np.ndarray
+    kmax: np.ndarray
+    basis: np.ndarray
 
 
-def _order(x, name, lo, hi, allow_none=False):
-    if x is None:
-        if allow_none:
-            return None
-        raise ValueError(f"{name} is required")
-    x = float(x)
-    if not (lo <= x <= hi) or abs(2 * x - round(2 * x)) > 1e-12:
-        raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {x!r}")
-    return x
+def build_system(s):
+    """The :class:`System` of :class:`~pnrotor.pn.settings.Settings` ``s``; a ValueError if f_ref is at or
+    past the end of the inspiral (the terminal events only fire on crossing zero, so none may start there)."""
+    kmax = kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order)
+    c1, c2, ell = s.chi1, s.chi2, s.ell_hat
+    bvals = basis_values(float(np.dot(ell, c1)), float(np.dot(ell, c2)), float(np.dot(c1, c2)),
+                         float(np.dot(c1, c1)), float(np.dot(c2, c2)))
+    p, at_v0 = _sys.make_parameters(
+        s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
+        kappa2=s.kappa2, v_end=s.v_max, rotor=s.rotor, phase_shift=s.precession_phase_shift,
+        aligned_basis=bvals if s.use_aligned else None,
+        omega_l="varpi" if s.precession == "averaged_varpi" else "torque", basis=bvals, v_check=s.v0)
+    _check_start(s, kmax, bvals, *at_v0)
+    if s.use_aligned:
+        rhs, events = _sys.rhs_aligned, _sys.events_aligned
+        y0 = np.array([s.v0, 0.0])
+    else:
+        rhs = _sys.rhs_precessing_instantaneous if s.precession == "instantaneous" else _sys.rhs_precessing
+        events = _sys.events_precessing
+        y0 = np.concatenate(([s.v0], c1, c2, s.R0, [0.0]))
+    # they cannot raise (error_model='numpy'), so they may go to the integrator by address
+    return System(by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG), p, y0, kmax, bvals)
 
 
-def _parse_sampling(sampling):
-    """→ ('steps', None) | ('final', None) | ('dt', seconds) | ('per_orbit', n)."""
-    if isinstance(sampling, str):
-        s = sampling.strip().lower()
-        if s in ("steps", "step", "accepted"):
-            return "steps", None
-        if s == "final":
-            return "final", None
-        raise ValueError(f"sampling string must be 'steps' or 'final', got {sampling!r}")
-    if isinstance(sampling, dict):
-        if len(sampling) != 1:
-            raise ValueError("sampling dict must have exactly one key: 'dt' or 'per_orbit'")
-        (key, val), = sampling.items()
-        sampling = (key, val)
-    if isinstance(sampling, tuple):
-        if len(sampling) != 2:
-            raise ValueError("sampling tuple must be ('dt', seconds) or ('per_orbit', n)")
-        key, val = sampling
-        if key == "dt":
-            return "dt", _ini.seconds(val, "sampling dt")
-        if key == "per_orbit":
-            if (isinstance(val, bool) or not isinstance(val, numbers.Real)
-                    or not (math.isfinite(val) and val >= 1 and val == int(val))):
-                raise ValueError(f"sampling per_orbit must be a positive integer, got {val!r}")
-            return "per_orbit", int(val)
-        raise ValueError(f"unknown sampling key {key!r}; use 'dt' or 'per_orbit'")
-    # a bare number or Quantity: Δt in seconds
-    return "dt", _ini.seconds(sampling, "sampling dt")
+def _check_start(s, kmax, bvals, n0, d0, e0, peak0):
+    """A ValueError naming f_ref and its bound if N, D, Ê′ or event 6 at v₀ say the inspiral has ended."""
+    why = ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
+           else "dv/dt <= 0" if not n0 * d0 > 0.0
+           else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS
+           else "dv/dt no longer increases with v" if not peak0 > 0.0 else None)
+    if why:
+        v_end = _sys.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2)
+        raise ValueError(f"f_ref = {s.f_ref} Hz is past the end of the {s.approximant} inspiral: {why} at "
+                         f"v = {s.v0:.4g}; for these masses and spins f_ref must be below "
+                         f"{_ini.frequency_from_v(v_end, s.M_sec):.6g} Hz (v = {v_end:.6g})")
 
 
-def _status_to_termination(res, direction, approximant):
+# ---------------------------------------------------------------------------------------------------
+# stage 3: one half of the integration
+# ---------------------------------------------------------------------------------------------------
+
+_FORWARD_EVENTS = np.array([1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0])
+_BACKWARD_EVENTS = np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0])
+"""Directions of the terminal events (:mod:`pnrotor.pn.system`): v − v_end rising forward, falling
+backward; the denominator of v̇ and event 6 falling; the others on any crossing."""
+
+
+def integrate_half(s, system, forward, t_eval, dense):
+    """DOP853 from f_ref forward (to f_max, or to the end of the inspiral within 4τ_N(v₀) + 10⁴ M) or
+    backward (to f_min, within twice the Newtonian time from f_min to f_ref + 10⁴ M) → (OdeResult,
+    termination name)."""
+    tau0 = _ini.newtonian_time_to_coalescence(s.v0, s.nu)
+    if forward:
+        p, t_end, directions = system.p, 4.0 * tau0 + 1.0e4, _FORWARD_EVENTS
+        end = "f_max" if s.f_max is not None else "v_max"
+    else:
+        p = system.p.copy()
+        p[_sys.P_VEND] = s.v_min
+        t_end = -(2.0 * (_ini.newtonian_time_to_coalescence(s.v_min, s.nu) - tau0) + 1.0e4)
+        directions, end = _BACKWARD_EVENTS, "f_min"
+    res = dop853(system.rhs, 0.0, system.y0, t_end, s.atol, rtol=s.rtol, args=p, max_steps=s.max_steps,
+                 t_eval=t_eval, dense=dense, events=system.events, n_events=_sys.N_EVENTS, **CONTROLLER,
+                 event_direction=directions)
+    return res, _status_to_termination(res, end, s.approximant)
+
+
+def _status_to_termination(res, end, approximant):
     if res.status == STATUS_EVENT:
         idx = res.event_index
         if idx == _sys.EV_V_END:
-            return direction
+            return end
         if idx == _sys.EV_POLE:
             return "energy_balance" if approximant == "T1" else "vdot_divergent"
         return {_sys.EV_ENERGY: "energy_balance", _sys.EV_VDOT: "vdot_nonpositive",
@@ -188,138 +218,8 @@ def _status_to_termination(res, direction, approximant):
             STATUS_STEP_UNDERFLOW: "step_underflow", STATUS_NONFINITE: "nonfinite"}[res.status]
 
 
-MODE_ALIGNED, MODE_COPRECESSING, MODE_ORBITAL = 0, 1, 2
-
-
-@njit(cache=True, inline="always")
-def _contd8_segment(coef, j, theta, out):
-    """DOP853 dense output of segment j at θ into out: the same polynomial as
-    :func:`pnrotor.ode.result.contd8` (Hairer's ``contd8``, r₁ + θ(r₂ + θ'(r₃ + θ(r₄ + θ'(r₅ + θ(r₆ +
-    θ'(r₇ + θ r₈))))))), θ' = 1 − θ), indexing coef[j] in place: slicing coef[j] for each sample
-    costs more than the polynomial for small states (2.4× for [v, Φ]), and calling ``contd8`` on a
-    view taken once per segment made a 1.4 + 1.4 M☉ run sampled at 1/4096 s 1.2× slower (2.2·10⁵ samples,
-    17 vs 21 ms).  Checked against ``DenseOutput`` in the tests."""
-    th1 = 1.0 - theta
-    for i in range(out.size):
-        out[i] = coef[j, 0, i] + theta * (coef[j, 1, i] + th1 * (coef[j, 2, i] + theta * (coef[j, 3, i] + th1 * (
-            coef[j, 4, i] + theta * (coef[j, 5, i] + th1 * (coef[j, 6, i] + theta * coef[j, 7, i]))))))
-
-
-@njit(cache=True, inline="always")
-def _store_row(i, vv, ph, w, x, yy, z, v, Phi, R, ell):
-    """Normalize R = (w, x, y, z) and store v, Φ, R and ℓ̂ = R ẑ R⁻¹ in row i."""
-    inv = 1.0 / math.sqrt(w * w + x * x + yy * yy + z * z)
-    w *= inv
-    x *= inv
-    yy *= inv
-    z *= inv
-    v[i] = vv
-    Phi[i] = ph
-    R[i, 0] = w
-    R[i, 1] = x
-    R[i, 2] = yy
-    R[i, 3] = z
-    ell[i, 0] = 2.0 * (x * z + w * yy)
-    ell[i, 1] = 2.0 * (yy * z - w * x)
-    ell[i, 2] = w * w - x * x - yy * yy + z * z
-
-
-@njit(cache=True)
-def _fill_history(mode, seg_t, seg_h, coef, tq, reverse, Y, R0, ell0, c1, c2, offset, v, Phi, chi1, chi2, R,
-                  ell):
-    """History rows offset, offset+1, … from states.
-
-    The states are either the rows of Y (``tq`` empty) or the DOP853 interpolant (segments
-    ``seg_t``, ``seg_h``, ``coef``) at the times ``tq``, found by walking the segments once: ``tq`` is
-    sorted along the direction of integration, or against it with ``reverse`` (then it is visited from
-    its end, so no reversed copy is needed; row offset + q still receives time tq[q]).  Per mode:
-
-    * aligned: y = [v, Φ], R = R₀ exp(Φẑ/2), spins constant;
-    * coprecessing: y = [v, χ₁, χ₂, R_p, Φ], R = R_p exp(Φẑ/2);
-    * orbital: y = [v, χ₁, χ₂, R, Φ].
-
-    exp(Φẑ/2) = (cos Φ/2, 0, 0, sin Φ/2) and q·(c, 0, 0, s) = (wc − zs, xc + ys, yc − xs, zc + ws).
-    """
-    dense = tq.size > 0
-    nrow = tq.size if dense else Y.shape[0]
-    nseg = seg_t.size
-    n = coef.shape[2] if dense else Y.shape[1]
-    y = np.empty(n)
-    j = 0
-    for qq in range(nrow):
-        q = nrow - 1 - qq if reverse else qq
-        if dense:
-            t = tq[q]
-            while j + 1 < nseg and (t - seg_t[j + 1]) * seg_h[j + 1] >= 0.0:
-                j += 1
-            _contd8_segment(coef, j, (t - seg_t[j]) / seg_h[j], y)
-        else:
-            for k in range(n):
-                y[k] = Y[q, k]
-        i = offset + q
-        if mode == MODE_ALIGNED:
-            # R₀ is a unit rotor and ℓ̂ = R₀ ẑ R₀⁻¹ is constant (rotations about ẑ fix it): ell0 = ℓ̂
-            ph = y[1]
-            c = math.cos(0.5 * ph)
-            s = math.sin(0.5 * ph)
-            v[i] = y[0]
-            Phi[i] = ph
-            R[i, 0] = R0[0] * c - R0[3] * s
-            R[i, 1] = R0[1] * c + R0[2] * s
-            R[i, 2] = R0[2] * c - R0[1] * s
-            R[i, 3] = R0[3] * c + R0[0] * s
-            for k in range(3):
-                ell[i, k] = ell0[k]
-                chi1[i, k] = c1[k]
-                chi2[i, k] = c2[k]
-        else:
-            ph = y[11]
-            if mode == MODE_COPRECESSING:
-                c = math.cos(0.5 * ph)
-                s = math.sin(0.5 * ph)
-                _store_row(i, y[0], ph, y[7] * c - y[10] * s, y[8] * c + y[9] * s, y[9] * c - y[8] * s,
-                           y[10] * c + y[7] * s, v, Phi, R, ell)
-            else:
-                _store_row(i, y[0], ph, y[7], y[8], y[9], y[10], v, Phi, R, ell)
-            for k in range(3):
-                chi1[i, k] = y[1 + k]
-                chi2[i, k] = y[4 + k]
-
-
-_NO_T = np.empty(0)
-_NO_Y = np.empty((0, 1))
-_NO_SEG = np.empty(1)
-_NO_COEF = np.empty((1, 8, 1))
-
-
-def _allocate_history(n):
-    return (np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 3)))
-
-
-def _phase_times(dense, phi_index, v_index, targets):
-    """Times at which Φ(t) (monotonic along the integration) equals each target: Newton on the dense
-    output with Φ̇ ≈ v³, starting from linear interpolation between step boundaries."""
-    if targets.size == 0:
-        return targets
-    ts = dense.ts
-    phis = dense(ts)[:, phi_index]
-    order = np.argsort(phis)
-    ts_o, ph_o = ts[order], phis[order]
-    t = np.interp(targets, ph_o, ts_o)
-    lo, hi = min(dense.t_min, dense.t_max), max(dense.t_min, dense.t_max)
-    for _ in range(8):
-        y = dense(t)
-        dphi = y[:, phi_index] - targets
-        t_new = np.clip(t - dphi / y[:, v_index] ** 3, lo, hi)
-        if np.all(np.abs(t_new - t) <= 4e-16 * np.maximum(np.abs(t), 1.0)):
-            t = t_new
-            break
-        t = t_new
-    return t
-
-
 # ---------------------------------------------------------------------------------------------------
-# evolve
+# evolve: the stages in order
 # ---------------------------------------------------------------------------------------------------
 
 def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4", pn_order=3.5,
@@ -384,176 +284,29 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     Evolution
     """
     wall0 = time.perf_counter()
-    # ---- inputs → geometric units -------------------------------------------------------------
-    m1 = _ini.solar_masses(m1, "m1")
-    m2 = _ini.solar_masses(m2, "m2")
-    f_ref = _ini.hertz(f_ref, "f_ref")
-    f_min = _ini.hertz(f_min, "f_min", allow_none=True)
-    f_max = _ini.hertz(f_max, "f_max", allow_none=True)
-    c1 = _ini.spin_vector(chi1, "chi1")
-    c2 = _ini.spin_vector(chi2, "chi2")
-    ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
-    approximant = normalize_approximant(approximant)
-    pn_order = _order(pn_order, "pn_order", 0.0, MAX_ORDER)
-    so_order = (min(pn_order, MAX_SO_ORDER) if spin_orbit_order is None
-                else _order(spin_orbit_order, "spin_orbit_order", -1.0, MAX_SO_ORDER))
-    ss_order = (min(pn_order, MAX_SS_ORDER) if spin_spin_order is None
-                else _order(spin_spin_order, "spin_spin_order", -1.0, MAX_SS_ORDER))
-    kappa1 = float(kappa1)
-    kappa2 = float(kappa2)
-    if rotor not in ("coprecessing", "orbital"):
-        raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
-    mode, sval = _parse_sampling(sampling)
-    if not (atol > 0.0 and math.isfinite(atol)) or not (rtol >= 0.0 and math.isfinite(rtol)):
-        raise ValueError(f"atol must be > 0 and rtol >= 0, both finite; got atol = {atol!r}, rtol = {rtol!r}")
-    if precession not in ("averaged", "averaged_varpi", "instantaneous"):
-        raise ValueError(f"precession must be 'averaged', 'averaged_varpi' or 'instantaneous', got {precession!r}")
-    if precession == "instantaneous":
-        rotor = "orbital"
-        precession_phase_shift = False
-    if precession_phase_shift is None:
-        precession_phase_shift = so_order >= 3.0
-
-    M_sec = _ini.total_mass_seconds(m1, m2)
-    X1 = m1 / (m1 + m2)
-    nu = X1 * (1.0 - X1)
-    v0 = _ini.v_from_frequency(f_ref, M_sec)
-    v_min = None if f_min is None else _ini.v_from_frequency(f_min, M_sec)
-    v_max = 1.0 if f_max is None else _ini.v_from_frequency(f_max, M_sec)
-    if v0 >= 1.0:
-        raise ValueError(f"f_ref = {f_ref} Hz gives v = {v0:.4g} >= 1; f_ref must be below "
-                         f"{1.0 / (math.pi * M_sec):.6g} Hz")
-    if v_min is not None and not v_min < v0:
-        raise ValueError(f"f_min = {f_min} Hz must be below f_ref = {f_ref} Hz")
-    if not v_max > v0:
-        raise ValueError(f"f_max = {f_max} Hz must be above f_ref = {f_ref} Hz")
-    R0 = _ini.frame_rotor(ell, n)
-
-    perp1 = c1 - np.dot(c1, ell) * ell
-    perp2 = c2 - np.dot(c2, ell) * ell
-    nonspinning = not np.any(c1) and not np.any(c2)
-    aligned = np.dot(perp1, perp1) <= 1e-28 and np.dot(perp2, perp2) <= 1e-28
-    use_aligned = aligned and not integrate_rotor
-    spin_content = "nonspinning" if nonspinning else ("aligned" if aligned else "precessing")
-    if aligned:  # remove round-off in-plane parts so the spins are exactly along ℓ̂
-        c1 = np.dot(c1, ell) * ell
-        c2 = np.dot(c2, ell) * ell
-
-    kmax = kmax_from_orders(pn_order, so_order, ss_order)
-    a1, a2 = float(np.dot(ell, c1)), float(np.dot(ell, c2))
-    bvals = basis_values(a1, a2, float(np.dot(c1, c2)), float(np.dot(c1, c1)), float(np.dot(c2, c2)))
-    p, (n0, d0, e0, peak0) = _sys.make_parameters(
-        X1, approximant, kmax, so_order=so_order, ss_order=ss_order, kappa1=kappa1, kappa2=kappa2, v_end=v_max,
-        rotor=rotor, phase_shift=precession_phase_shift, aligned_basis=bvals if use_aligned else None,
-        omega_l="varpi" if precession == "averaged_varpi" else "torque", basis=bvals, v_check=v0)
-
-    # ---- validity at f_ref: the terminal events only fire on crossing zero, so none may start at or below it
-    why = ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
-           else "dv/dt <= 0" if not n0 * d0 > 0.0
-           else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS
-           else "dv/dt no longer increases with v" if not peak0 > 0.0 else None)
-    if why:
-        v_end = _sys.inspiral_end(X1, approximant, kmax, bvals, kappa1, kappa2)
-        raise ValueError(f"f_ref = {f_ref} Hz is past the end of the {approximant} inspiral: {why} at v = {v0:.4g}; "
-                         f"for these masses and spins f_ref must be below "
-                         f"{_ini.frequency_from_v(v_end, M_sec):.6g} Hz (v = {v_end:.6g})")
-
-    inputs = {
-        "m1_Msun": m1, "m2_Msun": m2, "chi1": c1.tolist(), "chi2": c2.tolist(), "f_ref_Hz": f_ref,
-        "f_min_Hz": math.nan if f_min is None else f_min, "f_max_Hz": math.nan if f_max is None else f_max, "approximant": approximant, "pn_order": pn_order,
-        "spin_orbit_order": so_order, "spin_spin_order": ss_order, "ell_hat": ell.tolist(),
-        "n_hat": n.tolist(), "kappa1": kappa1, "kappa2": kappa2, "atol": float(atol), "rtol": float(rtol),
-        "sampling": mode, "sampling_value": math.nan if sval is None else float(sval), "rotor": rotor,
-        "precession_phase_shift": bool(precession_phase_shift), "integrate_rotor": bool(integrate_rotor),
-        "precession": precession,
-        "max_steps": int(max_steps), "M_seconds": M_sec, "v_ref": v0, "spin_content": spin_content,
-        "state": "aligned" if use_aligned else "precessing",
-    }
-
-    if use_aligned:
-        rhs, events = _sys.rhs_aligned, _sys.events_aligned
-        y0 = np.array([v0, 0.0])
-    else:
-        rhs = _sys.rhs_precessing_instantaneous if precession == "instantaneous" else _sys.rhs_precessing
-        events = _sys.events_precessing
-        y0 = np.concatenate(([v0], c1, c2, R0, [0.0]))
-    # they cannot raise (error_model='numpy'), so they may go to the integrator by address
-    rhs, events = by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG)
-
-    want_dense = mode in ("dt", "per_orbit")
-    t_eval = "final" if mode == "final" else None
-    tau0 = _ini.newtonian_time_to_coalescence(v0, nu)
-
-    # ---- forward ---------------------------------------------------------------------------------
+    s = settings(m1, m2, chi1, chi2, f_ref, f_min=f_min, f_max=f_max, approximant=approximant, pn_order=pn_order,
+                 spin_orbit_order=spin_orbit_order, spin_spin_order=spin_spin_order, ell_hat=ell_hat, n_hat=n_hat,
+                 kappa1=kappa1, kappa2=kappa2, atol=atol, rtol=rtol, sampling=sampling, rotor=rotor,
+                 precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
+                 precession=precession, max_steps=max_steps)
+    system = build_system(s)
+    inputs = s.inputs()
+    dense = s.sampling in ("dt", "per_orbit")
+    t_eval = "final" if s.sampling == "final" else None
     t_int = time.perf_counter()
-    res_f = dop853(rhs, 0.0, y0, 4.0 * tau0 + 1.0e4, atol, rtol=rtol, args=p, max_steps=max_steps,
-                   t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS, **CONTROLLER,
-                   event_direction=np.array([1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0]))
-    term_f = _status_to_termination(res_f, "f_max" if f_max is not None else "v_max", approximant)
-    # ---- backward --------------------------------------------------------------------------------
-    res_b = None
-    term_b = "not_integrated"
-    if v_min is not None:
-        pb = p.copy()
-        pb[_sys.P_VEND] = v_min
-        t_back = -(2.0 * (_ini.newtonian_time_to_coalescence(v_min, nu) - tau0) + 1.0e4)
-        res_b = dop853(rhs, 0.0, y0, t_back, atol, rtol=rtol, args=pb, max_steps=max_steps,
-                       t_eval=t_eval, dense=want_dense, events=events, n_events=_sys.N_EVENTS, **CONTROLLER,
-                       event_direction=np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0]))
-        term_b = _status_to_termination(res_b, "f_min", approximant)
+    res_f, term_f = integrate_half(s, system, True, t_eval, dense)
+    res_b, term_b = (None, "not_integrated") if s.v_min is None else integrate_half(s, system, False, t_eval, dense)
     t_int = time.perf_counter() - t_int
+    t_out, (v, Phi, x1, x2, R, ellh) = sample(s, res_f, res_b)
+    stats = _stats(res_f, res_b, term_f, term_b)
+    stats["wall_time_integrate_s"] = t_int
+    stats["wall_time_s"] = time.perf_counter() - wall0
+    return Evolution(t=np.asarray(t_out, dtype=np.float64), t_seconds=np.asarray(t_out) * s.M_sec, v=v, Phi=Phi,
+                     chi1=x1, chi2=x2, R=R, ell_hat=ellh, termination=term_f, stats=stats, inputs=inputs)
 
-    # ---- sampling --------------------------------------------------------------------------------
-    phi_i = _sys.YA_PHI if use_aligned else _sys.Y_PHI
-    v_i = _sys.YA_V
-    out_mode = MODE_ALIGNED if use_aligned else (MODE_ORBITAL if rotor == "orbital" else MODE_COPRECESSING)
-    R0c = np.ascontiguousarray(R0, dtype=np.float64)
-    if mode in ("final", "steps"):
-        if mode == "final":
-            parts = [(res_f.t[-1:], res_f.y[-1:])]
-        else:
-            parts = ([(res_b.t[:0:-1], res_b.y[:0:-1])] if res_b is not None else []) + [(res_f.t, res_f.y)]
-        t_out = np.concatenate([tp for tp, _ in parts])
-        hist = _allocate_history(t_out.size)
-        off = 0
-        for tp, Yp in parts:
-            _fill_history(out_mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, np.ascontiguousarray(Yp), R0c, ell,
-                          c1, c2, off, *hist)
-            off += tp.size
-    else:
-        if mode == "dt":
-            dt = sval / M_sec
-            k_hi = math.floor(res_f.dense.t_max / dt * (1.0 + 1e-15))
-            while k_hi * dt > res_f.dense.t_max:
-                k_hi -= 1
-            k_lo = 0
-            if res_b is not None:
-                k_lo = math.ceil(res_b.dense.t_max / dt * (1.0 + 1e-15))
-                while k_lo * dt < res_b.dense.t_max:
-                    k_lo += 1
-            t_out = np.arange(k_lo, k_hi + 1, dtype=np.float64)
-            t_out *= dt                                   # one allocation: t = k Δt, ascending
-            nb = -k_lo
-        else:  # per_orbit
-            step = 2.0 * math.pi / sval
-            phi_end = res_f.y[-1, phi_i]
-            tf = _phase_times(res_f.dense, phi_i, v_i, np.arange(0, math.floor(phi_end / step) + 1) * step)
-            tf[0] = 0.0
-            if res_b is not None:
-                phi_start = res_b.y[-1, phi_i]
-                tb = _phase_times(res_b.dense, phi_i, v_i, np.arange(math.ceil(phi_start / step), 0) * step)
-            else:
-                tb = np.empty(0)
-            t_out = np.concatenate((tb, tf))
-            nb = tb.size
-        hist = _allocate_history(t_out.size)
-        if nb:
-            d = res_b.dense   # backward samples: visited from t = 0 downwards, the direction of integration
-            _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, t_out[:nb], True, _NO_Y, R0c, ell, c1, c2, 0, *hist)
-        d = res_f.dense
-        _fill_history(out_mode, d.seg_t, d.seg_h, d.coef, t_out[nb:], False, _NO_Y, R0c, ell, c1, c2, nb, *hist)
-    v, Phi, x1, x2, R, ellh = hist
 
+def _stats(res_f, res_b, term_f, term_b):
+    """`Evolution.stats` but the wall times: the work of both halves, their terminations and the span."""
     halves = {"forward": res_f, "backward": res_b}
     stats = {}
     for key in ("nfev", "nsteps", "naccepted", "nrejected"):
@@ -568,11 +321,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     stats["t_final"] = float(res_f.t[-1])
     stats["v_final"] = float(res_f.y[-1, 0])
     stats["t_initial"] = float(res_b.t[-1]) if res_b is not None else 0.0
-    stats["wall_time_integrate_s"] = t_int
-    stats["wall_time_s"] = time.perf_counter() - wall0
-
-    return Evolution(t=np.asarray(t_out, dtype=np.float64), t_seconds=np.asarray(t_out) * M_sec, v=v, Phi=Phi,
-                     chi1=x1, chi2=x2, R=R, ell_hat=ellh, termination=term_f, stats=stats, inputs=inputs)
+    return stats
 
 
 def lalsuite_orders(approximant, phaseO=7, spinO=-1):

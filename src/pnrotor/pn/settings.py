@@ -1,0 +1,213 @@
+r"""First stage of a PN run: the user's inputs, checked, converted and completed → :class:`Settings`.
+
+:func:`settings` turns what :func:`pnrotor.pn.evolve.evolve` was given (masses in M☉ or astropy
+Quantities, GW frequencies in Hz, spins, frame, model options, sampling) into one record in geometric
+units (G = c = M = 1, :mod:`pnrotor.pn.initial`): v at f_ref, f_min and f_max, the initial rotor R₀
+(x̂, ŷ, ẑ) → (n̂, λ̂, ℓ̂), the mass ratio, the PN orders with their defaults, and the spin content
+(nonspinning, aligned or precessing) that decides which right-hand side is compiled in.  Every bad
+input is a ``ValueError`` naming the parameter and its allowed range.  No numba here: the later stages
+(:mod:`pnrotor.pn.evolve`, :mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
+"""
+
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import initial as _ini
+from .series import MAX_ORDER
+from .system import APPROXIMANTS
+
+MAX_SO_ORDER = 4.0
+MAX_SS_ORDER = 3.0
+PRECESSION = ("averaged", "averaged_varpi", "instantaneous")
+ROTORS = ("coprecessing", "orbital")
+
+
+@dataclass(eq=False)
+class Settings:
+    """A run's inputs after checking: physical values (M☉, Hz, s), model options and what follows from them.
+
+    ``f_min``/``f_max`` are None when not given (``v_min`` None, ``v_max`` = 1); ``sampling`` is 'steps',
+    'final', 'dt' (``sampling_value`` Δt in s) or 'per_orbit' (``sampling_value`` n); ``ell_hat``,
+    ``n_hat`` are exactly orthonormal and R0 maps x̂ → n̂, ẑ → ℓ̂; ``spin_content`` is 'nonspinning',
+    'aligned' or 'precessing' (aligned spins have their round-off in-plane parts removed); ``M_sec`` is
+    G M/c³ in s, ``X1`` = m₁/M, ``nu`` = X₁X₂."""
+
+    m1: float
+    m2: float
+    chi1: np.ndarray
+    chi2: np.ndarray
+    f_ref: float
+    f_min: float
+    f_max: float
+    approximant: str
+    pn_order: float
+    spin_orbit_order: float
+    spin_spin_order: float
+    ell_hat: np.ndarray
+    n_hat: np.ndarray
+    kappa1: float
+    kappa2: float
+    atol: float
+    rtol: float
+    sampling: str
+    sampling_value: float
+    rotor: str
+    precession_phase_shift: bool
+    integrate_rotor: bool
+    precession: str
+    max_steps: int
+    M_sec: float
+    X1: float
+    nu: float
+    v0: float
+    v_min: float
+    v_max: float
+    R0: np.ndarray
+    spin_content: str
+
+    @property
+    def use_aligned(self):
+        """Whether the run integrates only [v, Φ] (nonspinning or aligned spins, no integrate_rotor)."""
+        return self.spin_content != "precessing" and not self.integrate_rotor
+
+    def inputs(self):
+        """`Evolution.inputs`: every input, with units in the key names; only floats, ints, bools, strings and
+        lists of floats (absent f_min/f_max and the value of 'steps'/'final' sampling are NaN)."""
+        nan = math.nan
+        return {
+            "m1_Msun": self.m1, "m2_Msun": self.m2, "chi1": self.chi1.tolist(), "chi2": self.chi2.tolist(),
+            "f_ref_Hz": self.f_ref, "f_min_Hz": nan if self.f_min is None else self.f_min,
+            "f_max_Hz": nan if self.f_max is None else self.f_max, "approximant": self.approximant,
+            "pn_order": self.pn_order, "spin_orbit_order": self.spin_orbit_order,
+            "spin_spin_order": self.spin_spin_order, "ell_hat": self.ell_hat.tolist(), "n_hat": self.n_hat.tolist(),
+            "kappa1": self.kappa1, "kappa2": self.kappa2, "atol": float(self.atol), "rtol": float(self.rtol),
+            "sampling": self.sampling,
+            "sampling_value": nan if self.sampling_value is None else float(self.sampling_value),
+            "rotor": self.rotor, "precession_phase_shift": bool(self.precession_phase_shift),
+            "integrate_rotor": bool(self.integrate_rotor), "precession": self.precession,
+            "max_steps": int(self.max_steps), "M_seconds": self.M_sec, "v_ref": self.v0,
+            "spin_content": self.spin_content, "state": "aligned" if self.use_aligned else "precessing",
+        }
+
+
+def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, spin_orbit_order,
+             spin_spin_order, ell_hat, n_hat, kappa1, kappa2, atol, rtol, sampling, rotor, precession_phase_shift,
+             integrate_rotor, precession, max_steps):
+    """Check and convert :func:`pnrotor.pn.evolve.evolve`'s arguments (its docstring has their meaning and
+    defaults) → :class:`Settings`; a ``ValueError`` naming the first bad one."""
+    m1 = _ini.solar_masses(m1, "m1")
+    m2 = _ini.solar_masses(m2, "m2")
+    f_ref = _ini.hertz(f_ref, "f_ref")
+    f_min = _ini.hertz(f_min, "f_min", allow_none=True)
+    f_max = _ini.hertz(f_max, "f_max", allow_none=True)
+    c1 = _ini.spin_vector(chi1, "chi1")
+    c2 = _ini.spin_vector(chi2, "chi2")
+    ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
+    approximant = normalize_approximant(approximant)
+    pn_order = _order(pn_order, "pn_order", 0.0, MAX_ORDER)
+    so_order = (min(pn_order, MAX_SO_ORDER) if spin_orbit_order is None
+                else _order(spin_orbit_order, "spin_orbit_order", -1.0, MAX_SO_ORDER))
+    ss_order = (min(pn_order, MAX_SS_ORDER) if spin_spin_order is None
+                else _order(spin_spin_order, "spin_spin_order", -1.0, MAX_SS_ORDER))
+    kappa1 = float(kappa1)
+    kappa2 = float(kappa2)
+    if rotor not in ROTORS:
+        raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
+    mode, sval = parse_sampling(sampling)
+    if not (atol > 0.0 and math.isfinite(atol)) or not (rtol >= 0.0 and math.isfinite(rtol)):
+        raise ValueError(f"atol must be > 0 and rtol >= 0, both finite; got atol = {atol!r}, rtol = {rtol!r}")
+    if precession not in PRECESSION:
+        raise ValueError(f"precession must be 'averaged', 'averaged_varpi' or 'instantaneous', got {precession!r}")
+    if precession == "instantaneous":
+        rotor = "orbital"
+        precession_phase_shift = False
+    if precession_phase_shift is None:
+        precession_phase_shift = so_order >= 3.0
+    M_sec, X1, v0, v_min, v_max = _frequencies(m1, m2, f_ref, f_min, f_max)
+    spin_content, c1, c2 = _spin_content(c1, c2, ell)
+    return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, approximant, pn_order, so_order, ss_order, ell, n, kappa1,
+                    kappa2, atol, rtol, mode, sval, rotor, precession_phase_shift, integrate_rotor, precession,
+                    max_steps, M_sec, X1, X1 * (1.0 - X1), v0, v_min, v_max, _ini.frame_rotor(ell, n), spin_content)
+
+
+def _frequencies(m1, m2, f_ref, f_min, f_max):
+    """(G M/c³ in s, X₁, v at f_ref, at f_min (or None), at f_max (or 1)), checking their order and v₀ < 1."""
+    M_sec = _ini.total_mass_seconds(m1, m2)
+    X1 = m1 / (m1 + m2)
+    v0 = _ini.v_from_frequency(f_ref, M_sec)
+    v_min = None if f_min is None else _ini.v_from_frequency(f_min, M_sec)
+    v_max = 1.0 if f_max is None else _ini.v_from_frequency(f_max, M_sec)
+    if v0 >= 1.0:
+        raise ValueError(f"f_ref = {f_ref} Hz gives v = {v0:.4g} >= 1; f_ref must be below "
+                         f"{1.0 / (math.pi * M_sec):.6g} Hz")
+    if v_min is not None and not v_min < v0:
+        raise ValueError(f"f_min = {f_min} Hz must be below f_ref = {f_ref} Hz")
+    if not v_max > v0:
+        raise ValueError(f"f_max = {f_max} Hz must be above f_ref = {f_ref} Hz")
+    return M_sec, X1, v0, v_min, v_max
+
+
+def _spin_content(c1, c2, ell):
+    """('nonspinning' | 'aligned' | 'precessing', χ₁, χ₂); aligned spins (in-plane parts ≤ 1e-14) are made
+    exactly parallel to ℓ̂."""
+    perp1 = c1 - np.dot(c1, ell) * ell
+    perp2 = c2 - np.dot(c2, ell) * ell
+    if np.dot(perp1, perp1) > 1e-28 or np.dot(perp2, perp2) > 1e-28:
+        return "precessing", c1, c2
+    content = "aligned" if np.any(c1) or np.any(c2) else "nonspinning"
+    return content, np.dot(c1, ell) * ell, np.dot(c2, ell) * ell
+
+
+def normalize_approximant(approximant):
+    """'T1', 'T4' or 'T5' from 'Tn' (either case), 'TaylorTn' or 'SpinTaylorTn'; else a ValueError."""
+    a = str(approximant).strip()
+    for prefix in ("SpinTaylor", "Taylor"):
+        if a.startswith(prefix):
+            a = a[len(prefix):]
+    a = a.upper()
+    if a not in APPROXIMANTS:
+        raise ValueError(f"approximant must be one of T1, T4, T5 (or TaylorTn / SpinTaylorTn), got {approximant!r}")
+    return a
+
+
+def _order(x, name, lo, hi):
+    """A PN order: a multiple of 0.5 in [lo, hi]."""
+    if x is None:
+        raise ValueError(f"{name} is required")
+    x = float(x)
+    if not (lo <= x <= hi) or abs(2 * x - round(2 * x)) > 1e-12:
+        raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {x!r}")
+    return x
+
+
+def parse_sampling(sampling):
+    """→ ('steps', None) | ('final', None) | ('dt', seconds) | ('per_orbit', n)."""
+    if isinstance(sampling, str):
+        s = sampling.strip().lower()
+        if s in ("steps", "step", "accepted"):
+            return "steps", None
+        if s == "final":
+            return "final", None
+        raise ValueError(f"sampling string must be 'steps' or 'final', got {sampling!r}")
+    if isinstance(sampling, dict):
+        if len(sampling) != 1:
+            raise ValueError("sampling dict must have exactly one key: 'dt' or 'per_orbit'")
+        (key, val), = sampling.items()
+        sampling = (key, val)
+    if isinstance(sampling, tuple):
+        if len(sampling) != 2:
+            raise ValueError("sampling tuple must be ('dt', seconds) or ('per_orbit', n)")
+        key, val = sampling
+        if key == "dt":
+            return "dt", _ini.seconds(val, "sampling dt")
+        if key == "per_orbit":
+            if (isinstance(val, bool) or not isinstance(val, numbers.Real)
+                    or not (math.isfinite(val) and val >= 1 and val == int(val))):
+                raise ValueError(f"sampling per_orbit must be a positive integer, got {val!r}")
+            return "per_orbit", int(val)
+        raise ValueError(f"unknown sampling key {key!r}; use 'dt' or 'per_orbit'")
+    # a bare number or Quantity: Δt in seconds
+    return "dt", _ini.seconds(sampling, "sampling dt")
