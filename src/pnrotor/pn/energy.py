@@ -37,7 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .series import (B_A1, B_A1A1, B_A1A2, B_A2, B_A2A2, B_ONE, B_S11, B_S12, B_S22, new_series)
+from .series import assemble
 
 EULER_GAMMA = 0.57721566490153286061
 LN2 = math.log(2.0)
@@ -95,14 +95,6 @@ def spin_orbit_energy_sl_sigma(nu):
     }
 
 
-def sl_sigma_to_basis(X1, X2, c_s, c_sigma):
-    """Coefficients of ℓ̂·χ₁ and ℓ̂·χ₂ of c_s s_ℓ + c_σ δ σ_ℓ, with s_ℓ = X₁²a₁ + X₂²a₂ and
-    σ_ℓ = X₂a₂ − X₁a₁ (Bohé+ 2013, definitions above their Eq. (3.1), with M = 1)."""
-    delta = X1 - X2
-    return (c_s * X1 * X1 - c_sigma * delta * X1,
-            c_s * X2 * X2 + c_sigma * delta * X2)
-
-
 # --------------------------------------------------------------------------------------------------
 # quadratic in spin (orbit averaged)
 # --------------------------------------------------------------------------------------------------
@@ -139,39 +131,14 @@ def spin1_spin2_energy(nu):
     }
 
 
-def add_spin_spin(C, X1, X2, per_body_1, per_body_2, s1s2):
-    """Add orbit-averaged quadratic-in-spin terms, given in Sᵢ = Xᵢ²χᵢ units, to C in the χ basis."""
-    for k, (c_ss, c_ll) in per_body_1.items():
-        C[k, B_S11, 0] += c_ss * X1 ** 4
-        C[k, B_A1A1, 0] += c_ll * X1 ** 4
-    for k, (c_ss, c_ll) in per_body_2.items():
-        C[k, B_S22, 0] += c_ss * X2 ** 4
-        C[k, B_A2A2, 0] += c_ll * X2 ** 4
-    for k, (c_s12, c_l12) in s1s2.items():
-        C[k, B_S12, 0] += c_s12 * X1 ** 2 * X2 ** 2
-        C[k, B_A1A2, 0] += c_l12 * X1 ** 2 * X2 ** 2
-    return C
-
-
 # --------------------------------------------------------------------------------------------------
 # assembled series
 # --------------------------------------------------------------------------------------------------
 
 def energy_series(X1, kappa1=1.0, kappa2=1.0):
     """Ê(v): every known term (nonspinning to 4PN, spin-orbit to 3.5PN, spin² to 3PN), untruncated."""
-    X2 = 1.0 - X1
-    nu = X1 * X2
-    C = new_series()
-    e, elog = nonspinning_energy_coefficients(nu)
-    C[:, B_ONE, 0] = e
-    C[:, B_ONE, 1] = elog
-    for k, (cs, csig) in spin_orbit_energy_sl_sigma(nu).items():
-        c1, c2 = sl_sigma_to_basis(X1, X2, cs, csig)
-        C[k, B_A1, 0] += c1
-        C[k, B_A2, 0] += c2
-    add_spin_spin(C, X1, X2, spin_spin_energy_per_body(X1, kappa1), spin_spin_energy_per_body(X2, kappa2),
-                  spin1_spin2_energy(nu))
-    return C
+    return assemble(X1, kappa1, kappa2, nonspinning_energy_coefficients, spin_orbit_energy_sl_sigma,
+                    spin_spin_energy_per_body, spin1_spin2_energy)
 
 
 @njit(cache=True)

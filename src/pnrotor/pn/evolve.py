@@ -36,7 +36,6 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 * ``'not_integrated'`` — backward half only, when no f_min was given.
 """
 
-import math
 import time
 from dataclasses import dataclass, field
 

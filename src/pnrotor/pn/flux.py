@@ -29,8 +29,8 @@ import math
 
 import numpy as np
 
-from .energy import EULER_GAMMA, LN2, PI2, add_spin_spin, sl_sigma_to_basis
-from .series import B_A1, B_A2, B_ONE, new_series
+from .energy import EULER_GAMMA, LN2, PI2
+from .series import assemble
 
 PI = math.pi
 LN3 = math.log(3.0)
@@ -134,16 +134,5 @@ def spin1_spin2_flux(nu):
 
 def flux_series(X1, kappa1=1.0, kappa2=1.0):
     """F̂(v): every known term (nonspinning to 4.5PN, spin-orbit to 4PN, spin² to 3PN), untruncated."""
-    X2 = 1.0 - X1
-    nu = X1 * X2
-    C = new_series()
-    f, flog = nonspinning_flux_coefficients(nu)
-    C[:, B_ONE, 0] = f
-    C[:, B_ONE, 1] = flog
-    for k, (cs, csig) in spin_orbit_flux_sl_sigma(nu).items():
-        c1, c2 = sl_sigma_to_basis(X1, X2, cs, csig)
-        C[k, B_A1, 0] += c1
-        C[k, B_A2, 0] += c2
-    add_spin_spin(C, X1, X2, spin_spin_flux_per_body(X1, kappa1), spin_spin_flux_per_body(X2, kappa2),
-                  spin1_spin2_flux(nu))
-    return C
+    return assemble(X1, kappa1, kappa2, nonspinning_flux_coefficients, spin_orbit_flux_sl_sigma,
+                    spin_spin_flux_per_body, spin1_spin2_flux)

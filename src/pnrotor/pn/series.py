@@ -9,6 +9,8 @@ right-hand sides in :mod:`pnrotor.pn.system`:
 
   a relative expansion in v (k = 0 … 9, i.e. through 4.5PN) whose coefficients are linear combinations
   of the spin invariants ``B`` below and may carry one power of ln v;
+* the assembly of one quantity's series (Ê, F̂) from its coefficient functions (:func:`assemble`), the
+  spin-orbit terms converted from Bohé et al.'s s_ℓ, σ_ℓ and the spin-spin terms from Sᵢ = Xᵢ²χᵢ;
 * products of such series (with spin products reduced to the invariant basis), the truncated series
   ratio used by TaylorT4/T5, and truncation by PN order *separately* for each power of the spins;
 * the numba evaluator :func:`eval_series` used inside the right-hand sides.
@@ -66,6 +68,47 @@ MAX_ORDER = (NK - 1) / 2.0  # 4.5PN
 def new_series():
     """A zero series C[k, b, l]."""
     return np.zeros((NK, NB, NL))
+
+
+def assemble(X1, kappa1, kappa2, nonspinning, spin_orbit, spin_spin_per_body, spin1_spin2):
+    """The untruncated series C of one PN quantity (Ê or F̂) in the χ basis, from its coefficient functions
+    (:mod:`pnrotor.pn.energy`, :mod:`pnrotor.pn.flux`): ``nonspinning(ν)`` → (c, c_log) over k;
+    ``spin_orbit(ν)`` → {k: (c_s, c_σ)} of s_ℓ and δσ_ℓ; ``spin_spin_per_body(Xᵢ, κᵢ)`` → {k: (c_SS, c_LL)}
+    of Sᵢ·Sᵢ and (ℓ̂·Sᵢ)²; ``spin1_spin2(ν)`` → {k: (c_S12, c_L12)} of S₁·S₂ and (ℓ̂·S₁)(ℓ̂·S₂)."""
+    X2 = 1.0 - X1
+    nu = X1 * X2
+    C = new_series()
+    c, clog = nonspinning(nu)
+    C[:, B_ONE, 0] = c
+    C[:, B_ONE, 1] = clog
+    for k, (cs, csig) in spin_orbit(nu).items():
+        c1, c2 = sl_sigma_to_basis(X1, X2, cs, csig)
+        C[k, B_A1, 0] += c1
+        C[k, B_A2, 0] += c2
+    add_spin_spin(C, X1, X2, spin_spin_per_body(X1, kappa1), spin_spin_per_body(X2, kappa2), spin1_spin2(nu))
+    return C
+
+
+def sl_sigma_to_basis(X1, X2, c_s, c_sigma):
+    """Coefficients of ℓ̂·χ₁ and ℓ̂·χ₂ of c_s s_ℓ + c_σ δ σ_ℓ, with s_ℓ = X₁²a₁ + X₂²a₂ and
+    σ_ℓ = X₂a₂ − X₁a₁ (Bohé+ 2013, definitions above their Eq. (3.1), with M = 1)."""
+    delta = X1 - X2
+    return (c_s * X1 * X1 - c_sigma * delta * X1,
+            c_s * X2 * X2 + c_sigma * delta * X2)
+
+
+def add_spin_spin(C, X1, X2, per_body_1, per_body_2, s1s2):
+    """Add orbit-averaged quadratic-in-spin terms, given in Sᵢ = Xᵢ²χᵢ units, to C in the χ basis."""
+    for k, (c_ss, c_ll) in per_body_1.items():
+        C[k, B_S11, 0] += c_ss * X1 ** 4
+        C[k, B_A1A1, 0] += c_ll * X1 ** 4
+    for k, (c_ss, c_ll) in per_body_2.items():
+        C[k, B_S22, 0] += c_ss * X2 ** 4
+        C[k, B_A2A2, 0] += c_ll * X2 ** 4
+    for k, (c_s12, c_l12) in s1s2.items():
+        C[k, B_S12, 0] += c_s12 * X1 ** 2 * X2 ** 2
+        C[k, B_A1A2, 0] += c_l12 * X1 ** 2 * X2 ** 2
+    return C
 
 
 def kmax_from_orders(pn_order, so_order, ss_order):
