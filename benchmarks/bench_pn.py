@@ -4,8 +4,9 @@ For every case (equal mass, q = 3, q = 10, near-extremal spins, BNS; nonspinning
 both codes produce the orbit uniformly sampled at Δt = 1/4096 s from f_start to the end of the
 inspiral:
 
-* LAL: ``lalsimulation.SimInspiralSpinTaylorPNEvolveOrbit(Δt, …, fStart, fEnd=0, …, spinO=-1, tideO=0,
-  phaseO=7, lscorr=0, SpinTaylorTn)`` (Python call included);
+* LAL: ``pnrotor.interop.lal.spintaylor_series``, i.e.
+  ``lalsimulation.SimInspiralSpinTaylorPNEvolveOrbit(Δt, …, fStart, fEnd=0, …, spinO=-1, tideO=0, phaseO=7,
+  lscorr=0, SpinTaylorTn)`` (Python call included);
 * pnrotor: ``evolve(…, f_start, approximant=Tn, sampling=Δt, **lalsuite_orders(Tn))`` (Python call
   included: unit conversion, setup, both integrations, sampling, rotor reconstruction).
 
@@ -52,15 +53,6 @@ CASES = {
 }
 
 
-def lal_call(lal, ls, case, approx):
-    m1, m2, c1, c2, f = case
-    ap = ls.GetApproximantFromString("SpinTaylor" + approx)
-    out = ls.SimInspiralSpinTaylorPNEvolveOrbit(DT, m1 * lal.MSUN_SI, m2 * lal.MSUN_SI, f, 0.0, *c1, *c2,
-                                                 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0,
-                                                 -1, 0, 7, 0, ap)
-    return out[0].data.length
-
-
 def compile_times():
     """Cold and warm numba start-up, each in a fresh process."""
     code = textwrap.dedent("""
@@ -98,10 +90,11 @@ def main():
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
 
-    import lal
-    import lalsimulation as ls
-
+    from pnrotor.interop.lal import spintaylor_series
     from pnrotor.pn import evolve, lalsuite_orders
+
+    def lal_call(case, approx):
+        return spintaylor_series(*case, approx, DT)[0].data.length
 
     results = {}
     for approx in args.approximants:
@@ -111,7 +104,7 @@ def main():
             case = CASES[name]
             m1, m2, c1, c2, f = case
             # warm up both (numba cache load, LAL lazy init)
-            n_lal = lal_call(lal, ls, case, approx)
+            n_lal = lal_call(case, approx)
             e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling=DT, **orders)
             es = evolve(m1, m2, c1, c2, f, approximant=approx, sampling="steps", **orders)
             runs[name] = dict(lal=[], ours=[], ours_steps=[], integrate=[], n_lal=n_lal, n_ours=len(e),
@@ -124,7 +117,7 @@ def main():
                 # each timing includes freeing the output (LAL's SWIG series are destroyed when
                 # lal_call returns), so no run pays for the deallocation of another one
                 t = time.perf_counter()
-                lal_call(lal, ls, CASES[name], approx)
+                lal_call(CASES[name], approx)
                 r["lal"].append(time.perf_counter() - t)
                 t = time.perf_counter()
                 e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling=DT, **orders)
