@@ -48,6 +48,12 @@ EVOLVE_CASES = [
     (dict(sampling=("per_orbit", 2.5)), "sampling"), (dict(sampling={"per_orbit": NAN}), "sampling"),
     (dict(sampling="everything"), "sampling"), (dict(sampling=("dx", 1.0)), "sampling"),
     (dict(max_steps=0), "max_steps"),
+    # issue 15: numbers at the edges, bools and NaN κ (each named, none a ZeroDivisionError or a wrong blame)
+    (dict(m1=1e-300), "mass ratio"), (dict(m2=2e7), "mass ratio"), (dict(m1=True), "m1"), (dict(m2="ten"), "m2"),
+    (dict(f_ref=True), "f_ref"), (dict(f_ref=1e-300), "f_ref"), (dict(f_min=1e-300), "f_min"),
+    (dict(kappa1=NAN), "kappa1"), (dict(kappa2=INF), "kappa2"), (dict(kappa1=-1.0), "kappa1"),
+    (dict(kappa2=True), "kappa2"), (dict(kappa1="soft"), "kappa1"), (dict(chi1=(True, 0.0, 0.0)), "chi1"),
+    (dict(atol=True), "atol"), (dict(sampling=True), "sampling"),
 ]
 
 
@@ -55,6 +61,17 @@ EVOLVE_CASES = [
 def test_evolve_rejects(kw, name):
     with pytest.raises(ValueError, match=name):
         pnrotor.evolve(**{**GOOD, **kw})
+
+
+@pytest.mark.parametrize("sampling", [5e-324, ("per_orbit", 10 ** 13), 1 / 4096])
+def test_sample_count_is_bounded_by_memory_before_allocating(sampling, monkeypatch):
+    """Δt or n per orbit that would not fit: a ValueError naming sampling and the size, not a MemoryError
+    or an OverflowError (the last case fits in memory unless only 1 MB is free, as pretended here)."""
+    from pnrotor.pn import sampling as pn_sampling
+    if sampling == 1 / 4096:
+        monkeypatch.setattr(pn_sampling, "_available_memory", lambda: 2 ** 20)
+    with pytest.raises(ValueError, match=r"sampling = .* would need .* samples \(.* GiB\), more than"):
+        pnrotor.evolve(**GOOD, sampling=sampling)
 
 
 def test_normalize_approximant_is_public():

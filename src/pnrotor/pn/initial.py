@@ -34,7 +34,12 @@ def _positive(x, unit, name, what):
             x = x.to_value(getattr(u, unit))
     except ImportError:  # pragma: no cover - astropy is a dependency
         pass
-    x = float(x)
+    try:
+        if isinstance(x, (bool, np.bool_)):
+            raise TypeError
+        x = float(x)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a finite positive {what}, got {x!r}") from None
     if not math.isfinite(x) or x <= 0.0:
         raise ValueError(f"{name} must be a finite positive {what}, got {x!r}")
     return x
@@ -82,6 +87,8 @@ def newtonian_time_to_coalescence(v, nu):
 def _vec3(a, name):
     """Three finite floats from a 3-vector (plain Python floats: cheaper than numpy for three numbers)."""
     try:
+        if any(isinstance(c, (bool, np.bool_)) for c in a):
+            raise TypeError
         x, y, z = (float(c) for c in a)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a 3-vector of numbers, got {a!r}") from None

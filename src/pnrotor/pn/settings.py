@@ -23,6 +23,12 @@ MAX_SO_ORDER = 4.0
 MAX_SS_ORDER = 3.0
 PRECESSION = ("averaged", "averaged_varpi", "instantaneous")
 ROTORS = ("coprecessing", "orbital")
+MAX_MASS_RATIO = 1e6
+"""Largest m1/m2 or m2/m1: runs stay meaningful to ~1e4 (a precessing q = 1e6 binary from v = 0.2 already
+exhausts max_steps), and beyond ~1e150 the mass fractions' squares underflow."""
+V_MIN = 1e-3
+"""Smallest v at f_ref or f_min: from v ≈ 0.01 down the PN inspiral spans ≳ 10⁹ orbits and the integration
+ends at step_underflow or max_steps; far lower (v⁸ < 1e-308) it would divide by zero."""
 
 
 @dataclass(eq=False)
@@ -112,12 +118,13 @@ def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, 
                 else _order(spin_orbit_order, "spin_orbit_order", -1.0, MAX_SO_ORDER))
     ss_order = (min(pn_order, MAX_SS_ORDER) if spin_spin_order is None
                 else _order(spin_spin_order, "spin_spin_order", -1.0, MAX_SS_ORDER))
-    kappa1 = float(kappa1)
-    kappa2 = float(kappa2)
+    kappa1 = _kappa(kappa1, "kappa1")
+    kappa2 = _kappa(kappa2, "kappa2")
     if rotor not in ROTORS:
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     mode, sval = parse_sampling(sampling)
-    if not (atol > 0.0 and math.isfinite(atol)) or not (rtol >= 0.0 and math.isfinite(rtol)):
+    if (isinstance(atol, bool) or isinstance(rtol, bool) or not (atol > 0.0 and math.isfinite(atol))
+            or not (rtol >= 0.0 and math.isfinite(rtol))):
         raise ValueError(f"atol must be > 0 and rtol >= 0, both finite; got atol = {atol!r}, rtol = {rtol!r}")
     if precession not in PRECESSION:
         raise ValueError(f"precession must be 'averaged', 'averaged_varpi' or 'instantaneous', got {precession!r}")
@@ -133,8 +140,23 @@ def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, 
                     max_steps, M_sec, X1, X1 * (1.0 - X1), v0, v_min, v_max, _ini.frame_rotor(ell, n), spin_content)
 
 
+def _kappa(kappa, name):
+    """A spin-induced quadrupole parameter κ: a finite number ≥ 0 (1 for black holes)."""
+    try:
+        value = math.nan if isinstance(kappa, (bool, np.bool_)) else float(kappa)
+    except (TypeError, ValueError):
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0.0):
+        raise ValueError(f"{name} must be a finite number >= 0 (1 for a black hole, ~2-20 for neutron stars), "
+                         f"got {kappa!r}")
+    return value
+
+
 def _frequencies(m1, m2, f_ref, f_min, f_max):
-    """(G M/c³ in s, X₁, v at f_ref, at f_min (or None), at f_max (or 1)), checking their order and v₀ < 1."""
+    """(G M/c³ in s, X₁, v at f_ref, at f_min (or None), at f_max (or 1)), checking the mass ratio, the order of
+    the frequencies and V_MIN ≤ v < 1."""
+    if not max(m1, m2) <= MAX_MASS_RATIO * min(m1, m2):
+        raise ValueError(f"m1/m2 = {m1 / m2:.4g}: the mass ratio must be at most {MAX_MASS_RATIO:g} either way")
     M_sec = _ini.total_mass_seconds(m1, m2)
     X1 = m1 / (m1 + m2)
     v0 = _ini.v_from_frequency(f_ref, M_sec)
@@ -143,6 +165,10 @@ def _frequencies(m1, m2, f_ref, f_min, f_max):
     if v0 >= 1.0:
         raise ValueError(f"f_ref = {f_ref} Hz gives v = {v0:.4g} >= 1; f_ref must be below "
                          f"{1.0 / (math.pi * M_sec):.6g} Hz")
+    for name, f, v in (("f_ref", f_ref, v0), ("f_min", f_min, v_min)):
+        if v is not None and v < V_MIN:
+            raise ValueError(f"{name} = {f} Hz gives v = {v:.4g} < {V_MIN:g}; for these masses {name} must be at "
+                             f"least {_ini.frequency_from_v(V_MIN, M_sec):.6g} Hz")
     if v_min is not None and not v_min < v0:
         raise ValueError(f"f_min = {f_min} Hz must be below f_ref = {f_ref} Hz")
     if not v_max > v0:
