@@ -12,7 +12,7 @@ each evolved to the end of the inspiral:
 
 Each batch runs
 
-* serially, in this process (a loop over `pnrotor.cli.evolve.results_serial`, what ``--jobs 1`` does);
+* serially, in this process (a loop over `pnrotor.batch.backends.results_serial`, what ``--jobs 1`` does);
 * on a process pool of 1 and of 2 workers (`results_pool`, what ``--jobs N`` does) for each
   `multiprocessing` start method, start-up of the workers included (a new pool per batch, as in the CLI);
 * end to end through the CLI, ``pnrotor evolve --batch FILE.csv --jobs 1`` and ``--jobs 2`` (in this
@@ -39,7 +39,7 @@ import time
 import numpy as np
 
 from pnrotor.cli import main as cli_main
-from pnrotor.cli.evolve import results_pool, results_serial, start_method
+from pnrotor.batch.backends import results_pool, results_serial, start_method
 
 
 WORKLOADS = {"bbh-steps": (8.0, 80.0, "steps"), "bbh-1/4096": (8.0, 80.0, 1 / 4096),

@@ -15,7 +15,7 @@ from test_hdf5 import assert_identical
 
 import pnrotor
 from pnrotor import hdf5
-from pnrotor.cli import evolve as cli_evolve
+from pnrotor.batch import backends, table
 from pnrotor.cli import main
 
 MAIN = ["--m1", "30", "--m2", "10", "--chi1", "0.6,0,0.2", "--chi2", "0,-0.4,0.1", "--f-ref", "20"]
@@ -84,7 +84,7 @@ def test_refuses_to_overwrite_before_computing_and_overwrites_when_asked(in_tmp,
     assert evolve(capsys, *FAST)[0] == 0
     before = path.read_bytes()
     calls = []
-    monkeypatch.setattr(cli_evolve, "_evolve_row", lambda params: calls.append(params))
+    monkeypatch.setattr(backends, "evolve_row", lambda params: calls.append(params))
     code, out, err = evolve(capsys, *FAST)
     assert code == 2 and calls == [] and out == ""
     assert err == f"pnrotor evolve: error: {path.relative_to(in_tmp)} exists; pass --overwrite to replace it\n"
@@ -129,7 +129,7 @@ def test_default_name_lists_every_option_away_from_its_default(in_tmp, capsys):
     assert "backward       f_min: v reached the requested start frequency f_min" in out
     assert "T5, PN order 3 (spin-orbit 2.5, spin-spin 2), precession averaged_varpi, atol 1e-10" in out
     # -0.0 and 0 give the same name; instantaneous precession is named
-    assert cli_evolve.default_name(dict(FAST_KW, chi1=(-0.0, 0.0, 0.5), **cli_evolve.DEFAULTS)).startswith(
+    assert table.default_name(dict(FAST_KW, chi1=(-0.0, 0.0, 0.5), **table.DEFAULTS)).startswith(
         "T4_m30_m10_chi1-0,0,0.5_")
     code, _, _ = evolve(capsys, *FAST, "--precession", "instantaneous", "--sampling", "final")
     assert code == 0 and (in_tmp / "waveforms" / MAIN_NAME.replace("f20", "f100_instantaneous_final")).exists()
@@ -366,7 +366,7 @@ def test_batch_rows_with_bad_values_fail_alone(in_tmp, capsys):
     ("b.json", "{}", "must be .csv or .toml"),
 ])
 def test_invalid_batch_file_exits_2_before_running(name, text, message, in_tmp, capsys, monkeypatch):
-    monkeypatch.setattr(cli_evolve, "_evolve_row", lambda params: pytest.fail("ran"))
+    monkeypatch.setattr(backends, "evolve_row", lambda params: pytest.fail("ran"))
     write_text(in_tmp / name, text)
     code, out, err = evolve(capsys, "--batch", name)
     assert code == 2 and out == "" and err.startswith("pnrotor evolve: error: ") and message in err
@@ -399,7 +399,7 @@ def test_batch_usage_errors(in_tmp, capsys):
 @pytest.mark.parametrize("method", ["default", "forkserver"])
 def test_parallel_batch_equals_serial_bitwise(method, in_tmp, capsys, monkeypatch):
     if method != "default":
-        monkeypatch.setattr(cli_evolve, "start_method", lambda: method)
+        monkeypatch.setattr(backends, "start_method", lambda: method)
     rows = ["m1,m2,chi1,chi2,f_ref,sampling"]
     rng = np.random.default_rng(6)
     for _ in range(10):
@@ -441,7 +441,7 @@ def test_progress_bar_on_a_terminal_and_quiet(in_tmp, capsys, monkeypatch):
 
 def test_interrupted_batch_leaves_no_file(in_tmp, capsys, monkeypatch):
     write_text(in_tmp / "p.csv", CSV)
-    real = cli_evolve._evolve_row
+    real = backends.evolve_row
     calls = []
 
     def interrupt_second(params):
@@ -450,7 +450,7 @@ def test_interrupted_batch_leaves_no_file(in_tmp, capsys, monkeypatch):
             raise KeyboardInterrupt
         return real(params)
 
-    monkeypatch.setattr(cli_evolve, "_evolve_row", interrupt_second)
+    monkeypatch.setattr(backends, "evolve_row", interrupt_second)
     code, _, err = evolve(capsys, "--batch", "p.csv", "--jobs", "1")
     assert code == 130 and err == "pnrotor evolve: interrupted\n" and len(calls) == 2
     assert os.listdir(in_tmp / "waveforms") == []  # the first run was written, to a temporary file, now removed
@@ -478,7 +478,7 @@ def test_scheduler_without_dask_or_unreachable(in_tmp, capsys, monkeypatch):
     monkeypatch.undo()
     pytest.importorskip("distributed")
     monkeypatch.chdir(in_tmp)
-    monkeypatch.setattr(cli_evolve, "SCHEDULER_TIMEOUT", "0.5s")
+    monkeypatch.setattr(backends, "SCHEDULER_TIMEOUT", "0.5s")
     code, _, err = evolve(capsys, "--batch", "p.csv", "--scheduler", "tcp://127.0.0.1:1")
     assert code == 2 and "cannot connect to the Dask scheduler at tcp://127.0.0.1:1" in err
     assert os.listdir(in_tmp) == ["p.csv"]

@@ -36,6 +36,7 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 * ``'not_integrated'`` — backward half only, when no f_min was given.
 """
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -117,6 +118,33 @@ class Evolution:
 
     def __len__(self):
         return self.t.size
+
+    def span(self):
+        """(t_start, t_end in M, v_start, v_end, orbits, whether the orbits span the whole integration).
+
+        Times and v are those of the whole integration whatever the sampling (without f_min the start is f_ref,
+        where Φ = 0). The orbits (Φ_end − Φ_start)/2π are exact when the samples include both ends (sampling
+        'steps', or 'final' without f_min); otherwise they are counted between the first and last samples (a
+        Δt or per-orbit grid), or None (one sample that is not the start)."""
+        stats, inputs = self.stats, self.inputs
+        backward = stats["termination_backward"] != "not_integrated"
+        t0, t1 = stats["t_initial"], stats["t_final"]
+        n = len(self)
+        if not backward:
+            v0, phi0 = inputs["v_ref"], 0.0
+        elif n and self.t[0] == t0:
+            v0, phi0 = self.v[0].item(), self.Phi[0].item()
+        elif stats["termination_backward"] == "f_min":
+            v0, phi0 = (math.pi * inputs["M_seconds"] * inputs["f_min_Hz"]) ** (1 / 3), None
+        else:
+            v0, phi0 = (self.v[0].item() if n else math.nan), None
+        v1 = stats["v_final"]
+        phi1 = self.Phi[-1].item() if n and self.t[-1] == t1 else None
+        if phi0 is not None and phi1 is not None:
+            return t0, t1, v0, v1, (phi1 - phi0) / (2 * math.pi), True
+        if n >= 2:
+            return t0, t1, v0, v1, (self.Phi[-1] - self.Phi[0]).item() / (2 * math.pi), False
+        return t0, t1, v0, v1, None, False
 
 
 # ---------------------------------------------------------------------------------------------------

@@ -1,0 +1,102 @@
+"""`pnrotor.batch` from Python: a table run in this process or on worker processes equals single
+`pnrotor.evolve` calls bitwise, a bad row is reported without losing the others, a bad table is a
+ValueError naming what is wrong, and nothing is written before the batch is complete."""
+
+import os
+
+import pytest
+from test_cli_evolve import assert_same_run
+
+import pnrotor
+from pnrotor import batch, hdf5
+
+ROWS = [
+    dict(m1=30.0, m2=10.0, chi1=(0.6, 0.0, 0.2), chi2=(0.0, -0.4, 0.1), f_ref=100.0),
+    dict(m1=20.0, m2=15.0, chi1=(0.0, 0.0, 0.3), chi2=(0.0, 0.0, -0.2), f_ref=90.0, sampling=1 / 4096),
+    dict(m1=12.0, m2=9.0, chi1=(0.0, 0.0, 0.0), chi2=(0.0, 0.0, 0.0), f_ref=120.0, approximant="T5"),
+]
+CSV = ("m1,m2,chi1,chi2,f_ref,sampling,approximant,name\n"
+       '30,10,"0.6,0,0.2","0,-0.4,0.1",100,,,a\n'
+       '20,15,"0,0,0.3","0,0,-0.2",90,1/4096,,b\n'
+       "-5,10,\"0,0,0\",\"0,0,0\",100,,,bad\n"
+       '12,9,"0,0,0","0,0,0",120,,T5,c\n')
+
+
+@pytest.fixture
+def table(tmp_path):
+    path = tmp_path / "binaries.csv"
+    path.write_text(CSV)
+    return path
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_run_equals_single_evolve_calls_bitwise(table, tmp_path, jobs):
+    out = tmp_path / f"jobs{jobs}.h5"
+    outcome = batch.run(table, out, jobs=jobs)
+    assert outcome.written == 3 and outcome.path == out and sorted(outcome.briefs) == [0, 1, 3]
+    assert [row.name for row in outcome.failed] == ["bad"]
+    assert outcome.failed[0].error == "m1 must be a finite positive mass, got -5.0"
+    assert sorted(hdf5.list_runs(out)) == ["a", "b", "c"]
+    for name, kw in zip("abc", ROWS):
+        assert_same_run(hdf5.read(out, name), pnrotor.evolve(**kw))
+    assert set(os.listdir(tmp_path)) == {"binaries.csv", out.name}      # no part files left
+
+
+def test_plan_shows_rows_and_backend_before_running(table, tmp_path):
+    plan = batch.plan(table, tmp_path / "out.h5", jobs=2)
+    assert [row.name for row in plan.rows] == ["a", "b", "bad", "c"]
+    assert [index for index, _ in plan.tasks] == [0, 1, 2, 3] and plan.where == "2 worker processes"
+    assert not (tmp_path / "out.h5").exists()
+    assert batch.plan(table, tmp_path / "out.h5", jobs=1).where == "this process"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("m1,m2,chi1,chi2\n", "missing column f_ref"),
+    ("m1,m2,chi1,chi2,f_ref,spin\n", "unknown column 'spin'"),
+    ('m1,m2,chi1,chi2,f_ref,name\n30,10,"0,0,0","0,0,0",20,x\n30,10,"0,0,0","0,0,0",30,x\n', "the same name 'x'"),
+])
+def test_bad_table_is_a_value_error_naming_the_problem(tmp_path, text, message):
+    path = tmp_path / "t.csv"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=message):
+        batch.run(path, tmp_path / "out.h5")
+    assert os.listdir(tmp_path) == ["t.csv"]
+
+
+@pytest.mark.parametrize("options, message", [(dict(jobs=0), "jobs must be at least 1"),
+                                              (dict(jobs=2, scheduler="tcp://x:1"), "jobs applies to local runs")])
+def test_bad_options(table, tmp_path, options, message):
+    with pytest.raises(ValueError, match=message):
+        batch.plan(table, tmp_path / "out.h5", **options)
+
+
+def test_existing_output_refused_before_running_unless_overwrite(table, tmp_path, monkeypatch):
+    out = tmp_path / "out.h5"
+    out.write_bytes(b"keep")
+    monkeypatch.setattr(batch.backends, "evolve_row", lambda params: pytest.fail("ran"))
+    with pytest.raises(FileExistsError, match="exists"):
+        batch.run(table, out)
+    assert out.read_bytes() == b"keep"
+
+
+def test_interrupt_leaves_no_file(table, tmp_path, monkeypatch):
+    real, calls = batch.backends.evolve_row, []
+
+    def interrupt_second(params):
+        calls.append(params)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(params)
+
+    monkeypatch.setattr(batch.backends, "evolve_row", interrupt_second)
+    with pytest.raises(KeyboardInterrupt):
+        batch.run(table, tmp_path / "out.h5", jobs=1)
+    assert os.listdir(tmp_path) == ["binaries.csv"]
+
+
+def test_rows_already_read_and_defaults_for_empty_cells(table, tmp_path):
+    rows = batch.read_batch(table, {"sampling": "final"})
+    outcome = batch.plan(rows, tmp_path / "out.h5", jobs=1).run()
+    assert outcome.written == 3
+    assert len(hdf5.read(tmp_path / "out.h5", "a")) == 1                   # the default filled the empty cell
+    assert len(hdf5.read(tmp_path / "out.h5", "b")) > 1                    # its own 1/4096 s kept
