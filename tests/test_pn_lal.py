@@ -26,6 +26,8 @@ import pytest
 lal = pytest.importorskip("lal")
 ls = pytest.importorskip("lalsimulation")
 
+from pn_cases import CASES  # noqa: E402
+
 from pnrotor.interop.lal import spintaylor_orbit, spintaylor_series  # noqa: E402
 from pnrotor.pn import evolve, lalsuite_orders  # noqa: E402
 
@@ -53,24 +55,6 @@ def compare(m1, m2, chi1, chi2, f_start, approx, ell=(0, 0, 1), n=(1, 0, 0), kap
                 dn=np.max(_angle(E.n_hat[:N], nL)),
                 dchi=max(np.max(np.abs(E.chi1[:N] - L["chi1"][:N])), np.max(np.abs(E.chi2[:N] - L["chi2"][:N]))),
                 dv=np.max(np.abs(E.v[:N] - L["v"][:N])))
-
-
-CASES = {
-    "equal-nonspinning": (10, 10, [0, 0, 0], [0, 0, 0], 20.0),
-    "equal-aligned": (10, 10, [0, 0, 0.6], [0, 0, 0.6], 20.0),
-    "equal-precessing": (10, 10, [0.4, 0.3, 0.2], [-0.3, 0.1, 0.5], 20.0),
-    "q3-nonspinning": (30, 10, [0, 0, 0], [0, 0, 0], 20.0),
-    "q3-aligned": (30, 10, [0, 0, 0.5], [0, 0, -0.3], 20.0),
-    "q3-precessing": (30, 10, [0.5, 0.1, 0.3], [0, 0.4, -0.2], 20.0),
-    "q10-nonspinning": (50, 5, [0, 0, 0], [0, 0, 0], 20.0),
-    "q10-aligned": (50, 5, [0, 0, 0.7], [0, 0, 0.2], 20.0),
-    "q10-precessing": (50, 5, [0.6, 0.0, 0.4], [0.2, -0.2, 0.1], 20.0),
-    "near-extremal-aligned": (30, 10, [0, 0, 0.99], [0, 0, 0.99], 20.0),
-    "near-extremal-precessing": (30, 10, [0.7, 0.0, 0.7], [0, 0.99, 0], 20.0),
-    "BNS-nonspinning": (1.4, 1.4, [0, 0, 0], [0, 0, 0], 30.0),
-    "BNS-aligned": (1.4, 1.3, [0, 0, 0.05], [0, 0, -0.04], 30.0),
-    "BNS-precessing": (1.4, 1.3, [0.03, 0.02, 0.03], [0.0, -0.04, 0.01], 30.0),
-}
 
 
 def _check(r):

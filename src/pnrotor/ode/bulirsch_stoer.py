@@ -43,14 +43,11 @@ import math
 import numpy as np
 from numba import njit, types
 
-from .dop853 import (AFTER_STEP_SIG, AFTER_STEP_TYPE, FV_H, FV_T, FV_TFAIL, IV_NACC, IV_NANREJ,
-                     IV_NFEV, IV_NMOD, IV_NOUT, IV_NREJ, IV_NSTEPS, IV_STATUS, OUT_FINAL, OUT_STEPS,
-                     OUT_TEVAL, RHS_SIG, RHS_TYPE, _A1, _A2, _I1, _all_finite, _append_row, _f8, _finite_scalar,
-                     _default_hook, _entry_point, _i8, _jit_function, _status_message, _trivial_result, _validate_args,
-                     _validate_state, _validate_steps, _validate_t_eval, _validate_tolerances,
+from .dop853 import (AFTER_STEP_TYPE, FV_H, FV_T, FV_TFAIL, IV_NACC, IV_NANREJ, IV_NFEV, IV_NMOD, IV_NOUT,
+                     IV_NREJ, IV_NSTEPS, IV_STATUS, OUT_FINAL, OUT_STEPS, OUT_TEVAL, RHS_TYPE, _A1, _A2, _I1,
+                     _all_finite, _append_row, _common_inputs, _entry_point, _f8, _i8, _result, _trivial_result,
                      select_initial_step)
-from .result import (STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_SUCCESS,
-                     OdeResult)
+from .result import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_SUCCESS
 
 K_MAX_DEFAULT = 9
 """Default number of extrapolation columns (ODEX's KM = 9: orders up to 18)."""
@@ -352,38 +349,22 @@ def bulirsch_stoer(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None,
         raise ValueError("dense output is not implemented for bulirsch_stoer (dense must be False); use dop853")
     if events is not None or n_events:
         raise ValueError("events are not implemented for bulirsch_stoer (events must be None); use dop853")
-    t0 = _finite_scalar(t0, "t0")
-    t_end = _finite_scalar(t_end, "t_end")
-    y0 = _validate_state(y0)
-    n = y0.size
-    atol_a, rtol_a = _validate_tolerances(atol, rtol, n)
-    p = _validate_args(args)
-    fs, ms, max_steps = _validate_steps(first_step, max_step, max_steps, t0, t_end)
-    mode, te = _validate_t_eval(t_eval, t0, t_end)
-    if mode == OUT_TEVAL:
+    c = _common_inputs(rhs, t0, y0, t_end, atol, rtol, args, first_step, max_step, max_steps, t_eval, after_step)
+    if c.mode == OUT_TEVAL:
         raise ValueError("t_eval arrays are not supported by bulirsch_stoer (no dense output); "
                          "use t_eval=None or 'final', or dop853")
     if isinstance(k_max, (bool, np.bool_)) or not isinstance(k_max, (int, np.integer)) or not 4 <= k_max <= 12:
         raise ValueError(f"k_max must be an integer in [4, 12], got {k_max!r}")
-    rhs_f = _jit_function(rhs, RHS_SIG, "rhs")
-    after_f = _default_hook("after_step") if after_step is None else _jit_function(after_step, AFTER_STEP_SIG,
-                                                                                       "after_step")
-
-    if t_end == t0:
-        return _trivial_result(t0, y0, mode, te, "Bulirsch-Stoer")
+    if c.t_end == c.t0:
+        return _trivial_result(c.t0, c.y0, c.mode, c.t_eval, "Bulirsch-Stoer")
 
     # initial target column from the tolerance (Hairer's ODEX: k = -log10(tol)·0.6 + 1.5 columns)
-    ymag = max(float(np.max(np.abs(y0))), 1.0)
-    tol = float(np.mean(atol_a + rtol_a * np.abs(y0))) / ymag
+    ymag = max(float(np.max(np.abs(c.y0))), 1.0)
+    tol = float(np.mean(c.atol + c.rtol * np.abs(c.y0))) / ymag
     tol = min(max(tol, 1e-16), 1e-2)
     k_init = int(-math.log10(tol) * 0.6 + 1.5) - 1
     k_init = min(max(k_init, 1), int(k_max) - 2)
 
-    t_out, y_out, iv, fv = _entry_point(_bs_core)(rhs_f, after_f, t0, y0, t_end, p, atol_a, rtol_a, fs, ms,
-                                    max_steps, mode, int(k_max), k_init)
-    status = int(iv[IV_STATUS])
-    nout = int(iv[IV_NOUT])
-    return OdeResult(
-        t=t_out[:nout].copy(), y=y_out[:nout].copy(), nfev=iv[IV_NFEV], nsteps=iv[IV_NSTEPS],
-        naccepted=iv[IV_NACC], nrejected=iv[IV_NREJ], n_modified=iv[IV_NMOD], status=status,
-        message=_status_message(status, iv, fv), method="Bulirsch-Stoer")
+    t_out, y_out, iv, fv = _entry_point(_bs_core)(c.rhs, c.after_step, c.t0, c.y0, c.t_end, c.p, c.atol, c.rtol,
+                                                  c.first_step, c.max_step, c.max_steps, c.mode, int(k_max), k_init)
+    return _result(t_out, y_out, iv, fv, "Bulirsch-Stoer")

@@ -46,6 +46,7 @@ arguments), see ``benchmarks/bench_ode.py``.
 
 import math
 import weakref
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, types
@@ -917,6 +918,87 @@ def _trivial_result(t0, y0, mode, t_eval, method):
     return OdeResult(t, y, 0, 0, 0, 0, 0, STATUS_SUCCESS, "t_end == t0: nothing to integrate.", method=method)
 
 
+class _Inputs(NamedTuple):
+    """The arguments both integrators take, checked and converted (:func:`_common_inputs`)."""
+
+    rhs: object
+    after_step: object
+    t0: float
+    y0: np.ndarray
+    t_end: float
+    p: np.ndarray
+    atol: np.ndarray
+    rtol: np.ndarray
+    first_step: float
+    max_step: float
+    max_steps: int
+    mode: int
+    t_eval: np.ndarray
+
+
+def _common_inputs(rhs, t0, y0, t_end, atol, rtol, args, first_step, max_step, max_steps, t_eval, after_step):
+    """Check and convert what :func:`dop853` and :func:`~pnrotor.ode.bulirsch_stoer.bulirsch_stoer` share
+    (their docstrings say what each must be) → :class:`_Inputs`; a ValueError or TypeError naming the first
+    bad one."""
+    t0 = _finite_scalar(t0, "t0")
+    t_end = _finite_scalar(t_end, "t_end")
+    y0 = _validate_state(y0)
+    atol_a, rtol_a = _validate_tolerances(atol, rtol, y0.size)
+    p = _validate_args(args)
+    fs, ms, max_steps = _validate_steps(first_step, max_step, max_steps, t0, t_end)
+    mode, te = _validate_t_eval(t_eval, t0, t_end)
+    rhs_f = _jit_function(rhs, RHS_SIG, "rhs")
+    after_f = _default_hook("after_step") if after_step is None else _jit_function(after_step, AFTER_STEP_SIG,
+                                                                                       "after_step")
+    return _Inputs(rhs_f, after_f, t0, y0, t_end, p, atol_a, rtol_a, fs, ms, max_steps, mode, te)
+
+
+def _event_inputs(events, n_events, event_direction):
+    """(events function or the no-op hook, m, direction per event) from :func:`dop853`'s event arguments."""
+    if isinstance(n_events, (bool, np.bool_)) or not isinstance(n_events, (int, np.integer)) or n_events < 0:
+        raise ValueError(f"n_events must be an integer >= 0, got {n_events!r}")
+    n_events = int(n_events)
+    if events is None:
+        if n_events != 0:
+            raise ValueError("n_events must be 0 when no events function is given")
+        if event_direction is not None:
+            raise ValueError("event_direction given without an events function")
+        events_f = _default_hook("events")
+    else:
+        if n_events < 1:
+            raise ValueError("n_events must be >= 1 when an events function is given")
+        events_f = _jit_function(events, EVENTS_SIG, "events")
+    if event_direction is None:
+        return events_f, n_events, np.zeros(max(n_events, 1))
+    ed = _real_array(event_direction, "event_direction")
+    if ed.ndim > 1 or (ed.ndim == 1 and ed.size != n_events):
+        raise ValueError(f"event_direction must be a scalar or have shape ({n_events},), got shape {ed.shape}")
+    ed = np.broadcast_to(ed, (n_events,))
+    if not np.all(np.isin(ed, (-1.0, 0.0, 1.0))):
+        raise ValueError("event_direction values must be -1, 0 or +1")
+    return events_f, n_events, np.ascontiguousarray(ed, dtype=np.float64).copy()
+
+
+def _controller(safety, min_factor, max_factor):
+    """(safety, min_factor, max_factor) checked: 0 < safety ≤ 1, 0 < min_factor < 1 ≤ max_factor."""
+    safety = _positive_factor(safety, "safety", 0.0, 1.0)
+    min_factor = _positive_factor(min_factor, "min_factor", 0.0, 1.0, hi_open=True)  # < 1: rejections shrink h
+    max_factor = _finite_scalar(max_factor, "max_factor")
+    if max_factor < 1.0:
+        raise ValueError(f"max_factor must be >= 1, got {max_factor!r}")
+    return safety, min_factor, max_factor
+
+
+def _result(t_out, y_out, iv, fv, method, **extra):
+    """The :class:`OdeResult` of a core's outputs (its rows up to the output count, counters, status)."""
+    status = int(iv[IV_STATUS])
+    nout = int(iv[IV_NOUT])
+    return OdeResult(
+        t=t_out[:nout].copy(), y=y_out[:nout].copy(), nfev=iv[IV_NFEV], nsteps=iv[IV_NSTEPS],
+        naccepted=iv[IV_NACC], nrejected=iv[IV_NREJ], n_modified=iv[IV_NMOD], status=status,
+        message=_status_message(status, iv, fv), method=method, **extra)
+
+
 def dop853(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None, max_step=np.inf,
            max_steps=1_000_000, t_eval=None, dense=False, after_step=None, events=None, n_events=0,
            event_direction=None, safety=0.9, min_factor=1.0 / 3.0, max_factor=6.0):
@@ -988,66 +1070,23 @@ def dop853(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None, max_ste
     TypeError
         rhs/after_step/events not numba-compiled functions of the right signature.
     """
-    t0 = _finite_scalar(t0, "t0")
-    t_end = _finite_scalar(t_end, "t_end")
-    y0 = _validate_state(y0)
-    n = y0.size
-    atol_a, rtol_a = _validate_tolerances(atol, rtol, n)
-    p = _validate_args(args)
-    fs, ms, max_steps = _validate_steps(first_step, max_step, max_steps, t0, t_end)
-    mode, te = _validate_t_eval(t_eval, t0, t_end)
+    c = _common_inputs(rhs, t0, y0, t_end, atol, rtol, args, first_step, max_step, max_steps, t_eval, after_step)
+    safety, min_factor, max_factor = _controller(safety, min_factor, max_factor)
+    events_f, n_events, ev_dir = _event_inputs(events, n_events, event_direction)
     dense = bool(dense)
-    safety = _positive_factor(safety, "safety", 0.0, 1.0)
-    min_factor = _positive_factor(min_factor, "min_factor", 0.0, 1.0, hi_open=True)  # < 1: rejections shrink h
-    max_factor = _finite_scalar(max_factor, "max_factor")
-    if max_factor < 1.0:
-        raise ValueError(f"max_factor must be >= 1, got {max_factor!r}")
-    if isinstance(n_events, (bool, np.bool_)) or not isinstance(n_events, (int, np.integer)) or n_events < 0:
-        raise ValueError(f"n_events must be an integer >= 0, got {n_events!r}")
-    n_events = int(n_events)
-    if events is None:
-        if n_events != 0:
-            raise ValueError("n_events must be 0 when no events function is given")
-        if event_direction is not None:
-            raise ValueError("event_direction given without an events function")
-        events_f = _default_hook("events")
-    else:
-        if n_events < 1:
-            raise ValueError("n_events must be >= 1 when an events function is given")
-        events_f = _jit_function(events, EVENTS_SIG, "events")
-    if event_direction is None:
-        ev_dir = np.zeros(max(n_events, 1))
-    else:
-        ed = _real_array(event_direction, "event_direction")
-        if ed.ndim > 1 or (ed.ndim == 1 and ed.size != n_events):
-            raise ValueError(f"event_direction must be a scalar or have shape ({n_events},), got shape {ed.shape}")
-        ed = np.broadcast_to(ed, (n_events,))
-        if not np.all(np.isin(ed, (-1.0, 0.0, 1.0))):
-            raise ValueError("event_direction values must be -1, 0 or +1")
-        ev_dir = np.ascontiguousarray(ed, dtype=np.float64).copy()
-    rhs_f = _jit_function(rhs, RHS_SIG, "rhs")
-    after_f = _default_hook("after_step") if after_step is None else _jit_function(after_step, AFTER_STEP_SIG,
-                                                                                       "after_step")
-
-    if t_end == t0:
+    if c.t_end == c.t0:
         if dense:
             raise ValueError("dense=True needs t_end != t0 (there is no step to interpolate)")
-        return _trivial_result(t0, y0, mode, te, "DOP853")
+        return _trivial_result(c.t0, c.y0, c.mode, c.t_eval, "DOP853")
 
     t_out, y_out, seg_t, seg_h, seg_c, iv, fv, y_ev = _entry_point(_dop853_core)(
-        rhs_f, after_f, events_f, t0, y0, t_end, p, atol_a, rtol_a, fs, ms, max_steps,
-        te, mode, dense, n_events, ev_dir, safety, min_factor, max_factor)
-
-    status = int(iv[IV_STATUS])
-    nout = int(iv[IV_NOUT])
+        c.rhs, c.after_step, events_f, c.t0, c.y0, c.t_end, c.p, c.atol, c.rtol, c.first_step, c.max_step,
+        c.max_steps, c.t_eval, c.mode, dense, n_events, ev_dir, safety, min_factor, max_factor)
     nseg = int(iv[IV_NSEG])
     dense_out = None
     if dense and nseg > 0:
         dense_out = DenseOutput(seg_t[:nseg].copy(), seg_h[:nseg].copy(), seg_c[:nseg].copy(), fv[FV_T])
-    ev = status == STATUS_EVENT
-    return OdeResult(
-        t=t_out[:nout].copy(), y=y_out[:nout].copy(), nfev=iv[IV_NFEV], nsteps=iv[IV_NSTEPS],
-        naccepted=iv[IV_NACC], nrejected=iv[IV_NREJ], n_modified=iv[IV_NMOD], status=status,
-        message=_status_message(status, iv, fv),
-        t_event=float(fv[FV_TEVENT]) if ev else None, y_event=y_ev.copy() if ev else None,
-        event_index=int(iv[IV_EVENT]) if ev else None, dense=dense_out, method="DOP853")
+    ev = int(iv[IV_STATUS]) == STATUS_EVENT
+    return _result(t_out, y_out, iv, fv, "DOP853", t_event=float(fv[FV_TEVENT]) if ev else None,
+                   y_event=y_ev.copy() if ev else None, event_index=int(iv[IV_EVENT]) if ev else None,
+                   dense=dense_out)
