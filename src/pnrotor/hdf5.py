@@ -363,7 +363,7 @@ class _Writeback:
 
     def _fsync(self):
         try:
-            _fsync_data(self.path)
+            _fsync(self.path, os.fdatasync)
         except OSError:
             pass
 
@@ -455,19 +455,12 @@ def _temporary_beside(path):
         return temporary
 
 
-def _fsync(path):
+def _fsync(path, sync=os.fsync):
+    """``sync`` the file at ``path``: os.fsync, or os.fdatasync for `_Writeback`'s background flush of the data
+    (the final fsync writes the rest)."""
     fd = os.open(path, os.O_RDONLY)
     try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def _fsync_data(path):
-    """fdatasync `path` (the data; the final `_fsync` writes the rest): `_Writeback`'s background flush."""
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fdatasync(fd)
+        sync(fd)
     finally:
         os.close(fd)
 
