@@ -24,6 +24,9 @@ def _gm_sun_over_c3():
 MTSUN_SI = _gm_sun_over_c3()
 """G M☉ / c³ in seconds."""
 
+_BOOLS = (bool, np.bool_)
+"""Refused where a number is expected (float(True) would be 1.0)."""
+
 
 def _positive(x, unit, name, what):
     """A float from a float (already in `unit`) or an astropy Quantity converted to `unit` (an astropy unit
@@ -35,7 +38,7 @@ def _positive(x, unit, name, what):
     except ImportError:  # pragma: no cover - astropy is a dependency
         pass
     try:
-        if isinstance(x, (bool, np.bool_)):
+        if isinstance(x, _BOOLS):
             raise TypeError
         x = float(x)
     except (TypeError, ValueError):
@@ -87,9 +90,10 @@ def newtonian_time_to_coalescence(v, nu):
 def _vec3(a, name):
     """Three finite floats from a 3-vector (plain Python floats: cheaper than numpy for three numbers)."""
     try:
-        if any(isinstance(c, (bool, np.bool_)) for c in a):
+        x, y, z = a
+        if isinstance(x, _BOOLS) or isinstance(y, _BOOLS) or isinstance(z, _BOOLS):
             raise TypeError
-        x, y, z = (float(c) for c in a)
+        x, y, z = float(x), float(y), float(z)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a 3-vector of numbers, got {a!r}") from None
     if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):

@@ -143,7 +143,7 @@ def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, 
 def _kappa(kappa, name):
     """A spin-induced quadrupole parameter κ: a finite number ≥ 0 (1 for black holes)."""
     try:
-        value = math.nan if isinstance(kappa, (bool, np.bool_)) else float(kappa)
+        value = math.nan if isinstance(kappa, _ini._BOOLS) else float(kappa)
     except (TypeError, ValueError):
         value = math.nan
     if not (math.isfinite(value) and value >= 0.0):
@@ -165,10 +165,10 @@ def _frequencies(m1, m2, f_ref, f_min, f_max):
     if v0 >= 1.0:
         raise ValueError(f"f_ref = {f_ref} Hz gives v = {v0:.4g} >= 1; f_ref must be below "
                          f"{1.0 / (math.pi * M_sec):.6g} Hz")
-    for name, f, v in (("f_ref", f_ref, v0), ("f_min", f_min, v_min)):
-        if v is not None and v < V_MIN:
-            raise ValueError(f"{name} = {f} Hz gives v = {v:.4g} < {V_MIN:g}; for these masses {name} must be at "
-                             f"least {_ini.frequency_from_v(V_MIN, M_sec):.6g} Hz")
+    if v0 < V_MIN or (v_min is not None and v_min < V_MIN):
+        name, f, v = ("f_ref", f_ref, v0) if v0 < V_MIN else ("f_min", f_min, v_min)
+        raise ValueError(f"{name} = {f} Hz gives v = {v:.4g} < {V_MIN:g}; for these masses {name} must be at "
+                         f"least {_ini.frequency_from_v(V_MIN, M_sec):.6g} Hz")
     if v_min is not None and not v_min < v0:
         raise ValueError(f"f_min = {f_min} Hz must be below f_ref = {f_ref} Hz")
     if not v_max > v0:
