@@ -346,6 +346,19 @@ def test_killed_writer_leaves_target_absent_or_old(tmp_path, signum, existing):
         assert len(left) == 1 and TEMPORARY.match(left[0])  # SIGKILL can leave NAME.XXXXXXXX.pnrotor-tmp
 
 
+def test_writeback_thread_leaves_every_signal_to_the_main_thread(tmp_path, monkeypatch):
+    """The background fdatasync thread blocks all signals, so SIGINT/SIGTERM/SIGHUP reach the main thread
+    (which raises KeyboardInterrupt at once) instead of waiting until the main thread next runs Python."""
+    masks = []
+    monkeypatch.setattr(hdf5, "_fsync", lambda path, sync=os.fsync: masks.append(
+        signal.pthread_sigmask(signal.SIG_BLOCK, [])))
+    writeback = hdf5._Writeback(tmp_path / "any.h5")
+    writeback.start()
+    writeback.join()
+    assert {signal.SIGINT, signal.SIGTERM, signal.SIGHUP} <= masks[0]
+    assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, [])   # the main thread's own mask
+
+
 def test_new_file_permissions_follow_the_umask(tmp_path):
     previous = os.umask(0o027)
     try:

@@ -32,6 +32,7 @@ or `ValueError`).
 import dataclasses
 import importlib
 import os
+import signal
 import secrets
 import shutil
 import threading
@@ -362,6 +363,10 @@ class _Writeback:
             self._thread.join()
 
     def _fsync(self):
+        # a signal the kernel hands to this thread would wait for the main thread to return to Python: a
+        # Ctrl-C or SIGTERM during a long sleep or write there went unseen (a writer killed with SIGINT
+        # under load still ran 60 s later); blocked here, every signal goes to the main thread
+        signal.pthread_sigmask(signal.SIG_BLOCK, signal.valid_signals())
         try:
             _fsync(self.path, os.fdatasync)
         except OSError:
