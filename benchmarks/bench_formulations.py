@@ -10,27 +10,17 @@ Times are the best of --repeat interleaved rounds (robust on a shared machine).
 """
 
 import argparse
+import os
+import sys
 import time
 
 import numpy as np
-from numba import njit
 
 from pnrotor import integrate_angular_velocity
-from pnrotor.analytic import PrecessingNutatingBinary, binary_omega
 from pnrotor.formulations import FORMULATIONS
 
-BINARY = PrecessingNutatingBinary()
-P = np.array(BINARY.params)
-
-
-@njit
-def user_numba_omega(t):
-    w = binary_omega(t, P)
-    return np.array([w[0], w[1], w[2]])
-
-
-def user_python_omega(t):
-    return BINARY.angular_velocity(t)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+from test_integrate import BINARY, numba_omega, python_omega  # noqa: E402  (the binary's ω as a user's)
 
 
 def main():
@@ -41,7 +31,7 @@ def main():
     args = parser.parse_args()
     R0 = BINARY.rotor(0.0)
     cases = [(f"{name}, binary", BINARY, name) for name in FORMULATIONS]
-    cases += [("rotor, user numba ω", user_numba_omega, "rotor"), ("rotor, Python ω", user_python_omega, "rotor")]
+    cases += [("rotor, user numba ω", numba_omega, "rotor"), ("rotor, Python ω", python_omega, "rotor")]
 
     first = {}
     for label, omega, formulation in cases:

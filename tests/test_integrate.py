@@ -115,6 +115,8 @@ def test_damping_parameters_are_used():
     assert stiff.inputs["damping_lambda"] == 1.0 and stiff.inputs["damping_mu"] == 1.0
 
 
+# the binary's ω as a user would pass it: a numba function and a Python callable (also timed by
+# benchmarks/bench_formulations.py)
 P = np.array(BINARY.params)
 
 

@@ -154,10 +154,6 @@ def _envelope(t, delta):
 # --------------------------------------------------------------------------------------------------
 
 
-FORMULATION_NAMES = ("rotor", "generator", "generator-noreset", "vectors3", "vectors2", "vectors-damped")
-METHOD_NAMES = ("DOP853", "Bulirsch-Stoer")
-
-
 def _find(rows, formulation, method, atol, study="sweep"):
     for row in rows:
         if (row["formulation"], row["method"], row["atol"], row["study"]) == (formulation, method, atol, study):
@@ -191,6 +187,9 @@ def findings(rows, t_end):
     """Lines with the key rows and the paper's findings, computed from the bench rows."""
     sweep_rows = [r for r in rows if r["study"] == "sweep"]
     atols = sorted({r["atol"] for r in sweep_rows}, reverse=True)
+    # formulations and methods in the order the sweep ran them (that of FORMULATIONS and METHODS)
+    formulations = list(dict.fromkeys(r["formulation"] for r in sweep_rows))
+    methods = list(dict.fromkeys(r["method"] for r in sweep_rows))
     ref = 1e-12 if 1e-12 in atols else atols[-1]
     lines = [f"Key rows (T = {t_end:g}; max δ over all steps; wall = best of the timed runs):",
              f"  {'formulation':18s} {'method':15s} {'atol':>7s} {'rtol':>7s} {'max δ':>9s} {'wall s':>8s} "
@@ -221,8 +220,8 @@ def findings(rows, t_end):
         rb = min(rotor_runs, key=lambda r: r["max_delta"])
         lines.append(f"  best max δ, rotor + DOP853: {rb['max_delta']:.3g} (atol {rb['atol']:g}); over all runs: "
                      f"{b['max_delta']:.3g} ({b['formulation']}, {b['method']}, atol {b['atol']:g})")
-    others = [f for f in FORMULATION_NAMES if f != "rotor"]
-    for method in METHOD_NAMES:
+    others = [f for f in formulations if f != "rotor"]
+    for method in methods:
         lines.append(f"  {method}, cost relative to the rotor (evaluations / wall time):")
         ev = ", ".join(f"{f} {_ratio(rows, 'nfev', (f, method), ('rotor', method), atols):.2f}"
                        f" / {_ratio(rows, 'wall_s', (f, method), ('rotor', method), atols):.2f}" for f in others)
@@ -245,7 +244,7 @@ def findings(rows, t_end):
     if probe:
         lines.append(f"  damping (vectors-damped, λ = μ, atol {probe[0]['atol']:g}, T = {probe[0]['t_end']:g}; "
                      f"evaluations, steps, max δ):")
-        for method in METHOD_NAMES:
+        for method in methods:
             cells = [f"{r['damping']:g}: {r['nfev']}, {r['steps']}, {r['max_delta']:.1e}"
                      + ("" if r["status"] == 0 else f" (status {r['status']})")
                      for r in probe if r["method"] == method]

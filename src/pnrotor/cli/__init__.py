@@ -1,7 +1,8 @@
 """The `pnrotor` command line: a thin layer that parses, calls the library, prints and exits.
 
 One module per subcommand (`verify`, `bench`, `evolve`, `inspect`, `plot`), each with
-``add_parser(subparsers)`` that registers its arguments and sets ``func`` to a ``run(args) -> int``.
+``add_parser(subparsers)`` that registers its arguments and sets ``func`` to a ``run(args) -> int``;
+an option several subcommands take is added by one helper here (`add_damping_option`).
 Errors in the user's input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``,
 ``IsADirectoryError``, or a `UsageError` raised by a subcommand) are printed as one line on stderr with
 exit status 2 and no traceback; Ctrl-C exits with 130.
@@ -16,6 +17,13 @@ SUBCOMMANDS = ("verify", "bench", "evolve", "inspect", "plot")
 
 class UsageError(Exception):
     """A problem with the command line or its input that the user can fix."""
+
+
+def add_damping_option(parser):
+    """``--damping LAMBDA MU``: the damping rates of vectors-damped (`verify` and `bench`), by default
+    those of `pnrotor.integrate_angular_velocity`."""
+    parser.add_argument("--damping", type=float, nargs=2, default=(0.01, 0.01), metavar=("LAMBDA", "MU"),
+                        help="damping rates of vectors-damped (default: 0.01 0.01)")
 
 
 def build_parser():

@@ -16,7 +16,7 @@ import math
 import time
 from pathlib import Path
 
-from pnrotor.cli import UsageError
+from pnrotor.cli import UsageError, add_damping_option
 
 
 def add_parser(subparsers):
@@ -35,8 +35,7 @@ def add_parser(subparsers):
     parser.add_argument("--t-end", type=float, metavar="T", help="integrate over [0, T] (default: 1e6, quick 1e5)")
     parser.add_argument("--atols", type=float, nargs="+", metavar="ATOL", help="absolute tolerances to sweep")
     parser.add_argument("--repeat", type=int, help="timed runs per configuration, best kept (default: 3, quick 1)")
-    parser.add_argument("--damping", type=float, nargs=2, default=(0.01, 0.01), metavar=("LAMBDA", "MU"),
-                        help="damping rates of vectors-damped (default: 0.01 0.01)")
+    add_damping_option(parser)
     parser.add_argument("--no-scipy", action="store_true", help="skip the scipy baseline")
     parser.set_defaults(func=run)
 

@@ -17,6 +17,8 @@ import math
 import time
 from pathlib import Path
 
+from pnrotor.cli import add_damping_option
+
 DEFAULT_MAX_ERROR = 2e-10
 """Bound on max δ for the default run (rotor, DOP853, atol 1e-12, T = 10⁶)."""
 
@@ -37,8 +39,7 @@ def add_parser(subparsers):
                         help="end of the interval [0, T]; negative integrates backward (default: 1e6, 1000 orbits)")
     parser.add_argument("--max-error", type=float, default=DEFAULT_MAX_ERROR, metavar="E",
                         help=f"largest acceptable max δ (default: {DEFAULT_MAX_ERROR:g})")
-    parser.add_argument("--damping", type=float, nargs=2, default=(0.01, 0.01), metavar=("LAMBDA", "MU"),
-                        help="damping rates of vectors-damped (default: 0.01 0.01)")
+    add_damping_option(parser)
     parser.add_argument("-o", "--output", metavar="FILE.h5",
                         help="write the FrameHistory, with the binary's parameters, to this HDF5 file "
                         "(pnrotor plot draws its δ(t))")
