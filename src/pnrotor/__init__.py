@@ -7,6 +7,8 @@ _EXPORTS = {
     "FrameHistory": "pnrotor.history",
     "evolve": "pnrotor.pn.evolve",
     "Evolution": "pnrotor.pn.evolve",
+    "modes": "pnrotor.waveform.modes",
+    "Modes": "pnrotor.waveform.modes",
 }
 
 

@@ -1,8 +1,11 @@
-"""Waveforms from the frame: mode layout, Wigner matrices from rotors, spin-weighted harmonics and
-polarizations.
+"""Waveforms from the frame: the modes h_ℓm of a PN evolution and their polarizations.
 
-* :mod:`~pnrotor.waveform.layout` — the order of the (ℓ, m) rows;
+* :mod:`~pnrotor.waveform.modes` — ``modes(evolution, ell_max, amplitude_order, distance)`` → :class:`Modes`
+  (inertial, co-precessing or co-orbital frame; h₊, h×), also ``pnrotor.modes``;
+* :mod:`~pnrotor.waveform.nonspinning`, :mod:`~pnrotor.waveform.spin` — the co-orbital amplitudes, one
+  file per source, each term cited; :mod:`~pnrotor.waveform.amplitudes` — their table and numba sum;
 * :mod:`~pnrotor.waveform.wigner` — 𝔇^ℓ_{m m'}(R) straight from rotors (no Euler angles) and
   :func:`~pnrotor.waveform.wigner.rotate_modes`, numba;
-* :mod:`~pnrotor.waveform.polarizations` — ₛY_ℓm and h₊, h× from modes, in LALSuite's convention.
+* :mod:`~pnrotor.waveform.polarizations` — ₛY_ℓm and h₊, h× from modes, in LALSuite's convention;
+* :mod:`~pnrotor.waveform.layout` — the order of the (ℓ, m) rows.
 """

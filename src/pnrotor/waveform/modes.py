@@ -1,0 +1,159 @@
+"""Waveform modes h_ℓm of a PN evolution: the co-orbital amplitudes rotated by the evolved frame.
+
+For every sample of an :class:`pnrotor.pn.evolve.Evolution` (v, Φ, χ₁, χ₂ and the orbital-frame rotor R
+with n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹):
+
+1. the spins in the co-orbital frame, χᵢ' = R⁻¹ χᵢ R (components along n̂, λ̂, ℓ̂);
+2. the co-orbital amplitudes H_ℓm(v, ν, δ, χ₁', χ₂') up to ``amplitude_order`` and ``ell_max``:
+   :mod:`pnrotor.waveform.nonspinning` and :mod:`pnrotor.waveform.spin`, each term with its source;
+3. the inertial modes h_ℓm = Σ_m' 𝔇^ℓ_{m m'}(R) H_ℓm' (:mod:`pnrotor.waveform.wigner`; Boyle et al. 2013,
+   arXiv:1302.2919): the frame history is exactly what turns amplitudes into a waveform.
+
+Convention: LALSuite's (its mode signs; h₊ − i h× = Σ h_ℓm ₋₂Y_ℓm(ι, φ) with its ₋₂Y_ℓm, see
+:mod:`pnrotor.waveform.polarizations`); for a nonspinning binary h₂₂ = +|h₂₂| e^{−2iΦ}.  Kidder 2008
+(arXiv:0710.0614) and Blanchet et al. 2008 (arXiv:0802.1249) write every mode with the opposite sign,
+h_ℓm(LAL) = −h_ℓm(Kidder, Blanchet), as LALSuite's own conversion
+(``XLALCreateSimInspiralPNModeCOMPLEX16TimeSeriesLALConvention``) does.  Units: r h/M (dimensionless)
+unless a ``distance`` is given, then strain at that distance.
+
+Checked: against LALSuite's SpinTaylorT4 modes (ℓ ≤ 4, 1.5PN; tests/test_waveform_lal.py), the PN flux
+(tests/test_waveform_amplitudes.py), the rotation of a whole binary by a fixed rotor and the
+quadrupole formula (tests/test_waveform_modes.py).
+"""
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from pnrotor import quaternion as q
+from pnrotor.waveform import polarizations as _pol
+from pnrotor.waveform.amplitudes import coorbital_modes
+from pnrotor.waveform.layout import ell_m as _ell_m
+from pnrotor.waveform.layout import mode_index
+from pnrotor.waveform.wigner import rotate_modes
+
+__all__ = ["Modes", "modes", "FRAMES", "AMPLITUDE_ORDERS"]
+
+FRAMES = ("inertial", "coprecessing", "coorbital")
+AMPLITUDE_ORDERS = tuple(k / 2 for k in range(8))
+ELL_MAX = 8
+
+
+def _megaparsecs(distance):
+    """Mpc from a float (Mpc) or an astropy Quantity of length; ValueError naming ``distance``."""
+    from pnrotor.pn.initial import _positive
+
+    return _positive(distance, "Mpc", "distance", "distance in Mpc")
+
+
+def _scale(from_Mpc, to_Mpc, M_seconds):
+    """Factor taking modes at distance ``from_Mpc`` (None: r h / M) to strain at ``to_Mpc``."""
+    from astropy import constants as const
+    from astropy import units as u
+
+    source = M_seconds * const.c.value if from_Mpc is None else from_Mpc * u.Mpc.to(u.m)
+    return source / (to_Mpc * u.Mpc.to(u.m))
+
+
+@dataclass(eq=False)
+class Modes:
+    """Modes h_ℓm(t) of one run in one frame.
+
+    Attributes
+    ----------
+    t, t_seconds : (N,) times in M and in s (those of the evolution)
+    ell_m : list of (ℓ, m), ℓ = 2 … ell_max, m = −ℓ … ℓ
+    data : (n_modes, N) complex, row k is the mode ell_m[k]
+    frame : "inertial", "coprecessing" (ẑ = ℓ̂, no orbital phase) or "coorbital" (ẑ = ℓ̂, x̂ = n̂)
+    R : (N, 4) the orbital-frame rotor, Phi : (N,) the orbital phase (to change frames)
+    distance_Mpc : the distance of ``data`` as strain, or None for r h / M
+    inputs : every input of the evolution and of :func:`modes`
+    """
+
+    t: np.ndarray
+    t_seconds: np.ndarray
+    ell_m: list
+    data: np.ndarray
+    frame: str
+    R: np.ndarray
+    Phi: np.ndarray
+    distance_Mpc: float = None
+    inputs: dict = field(default_factory=dict)
+
+    @property
+    def ell_max(self):
+        return self.ell_m[-1][0]
+
+    def mode(self, ell, m):
+        """h_ℓm, (N,) complex."""
+        if not (2 <= ell <= self.ell_max and abs(m) <= ell):
+            raise ValueError(f"mode (ell, m) = ({ell}, {m}) not in these modes: need 2 <= ell <= {self.ell_max}, "
+                             f"|m| <= ell")
+        return self.data[mode_index(ell, m)]
+
+    def _frame_rotor(self, frame):
+        """The rotor taking the inertial frame to ``frame``'s axes."""
+        if frame == "inertial":
+            return np.broadcast_to(np.array([1.0, 0.0, 0.0, 0.0]), self.R.shape)
+        if frame == "coorbital":
+            return self.R
+        half = -0.5 * self.Phi
+        return q.multiply(self.R, np.column_stack((np.cos(half), np.zeros_like(half), np.zeros_like(half),
+                                                   np.sin(half))))
+
+    def in_frame(self, frame):
+        """These modes in another frame (one of :data:`FRAMES`): h' = 𝔇(R'⁻¹ R) h."""
+        if frame not in FRAMES:
+            raise ValueError(f"frame must be one of {', '.join(FRAMES)}; got {frame!r}")
+        if frame == self.frame:
+            return self
+        rotor = q.multiply(q.conjugate(self._frame_rotor(frame)), self._frame_rotor(self.frame))
+        return replace(self, data=rotate_modes(self.data, rotor, self.ell_max), frame=frame)
+
+    def polarizations(self, inclination, phi_ref=0.0, distance=None, psi=0.0):
+        """Strain h₊, h× (N,) seen from the direction (θ, φ) = (ι, π/2 − φ_ref) of the inertial frame — the
+        direction LALSuite gives a line of sight with inclination ι and reference phase φ_ref when it
+        builds polarizations from modes (``azimuthal = LAL_PI_2 - phiRef`` in LALSimInspiral.c) — at
+        ``distance`` (Mpc or an astropy length; default the modes' own), polarization angle ψ."""
+        if distance is None and self.distance_Mpc is None:
+            raise ValueError("distance: these modes are r h / M; give a distance (Mpc) for strain")
+        to_Mpc = self.distance_Mpc if distance is None else _megaparsecs(distance)
+        scale = _scale(self.distance_Mpc, to_Mpc, self.inputs["M_seconds"])
+        data = self.in_frame("inertial").data
+        hp, hc = _pol.polarizations(data, self.ell_m, inclination, 0.5 * np.pi - phi_ref, psi)
+        return scale * hp, scale * hc
+
+
+def _check(ell_max, amplitude_order):
+    if isinstance(ell_max, bool) or not isinstance(ell_max, (int, np.integer)) or not 2 <= ell_max <= ELL_MAX:
+        raise ValueError(f"ell_max must be an integer from 2 to {ELL_MAX}; got {ell_max!r}")
+    try:
+        order2 = 2.0 * float(amplitude_order)
+    except (TypeError, ValueError):
+        order2 = np.nan
+    if isinstance(amplitude_order, bool) or not (order2 in range(8)):
+        raise ValueError(f"amplitude_order must be one of 0, 0.5, ..., 3.5; got {amplitude_order!r}")
+    return int(ell_max), int(order2)
+
+
+def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
+    """Inertial-frame modes h_ℓm of ``evolution`` (module docstring) for ℓ ≤ ``ell_max`` (2 … 8) with
+    amplitude terms through ``amplitude_order`` (0 … 3.5 in steps of 0.5), as strain at ``distance``
+    (Mpc or an astropy length) or, without one, as r h / M.  Returns :class:`Modes`."""
+    ell_max, order2 = _check(ell_max, amplitude_order)
+    inputs = evolution.inputs
+    chi1 = chi2 = None
+    if inputs["spin_content"] != "nonspinning":
+        Rinv = q.conjugate(evolution.R)
+        chi1, chi2 = q.rotate(Rinv, evolution.chi1), q.rotate(Rinv, evolution.chi2)
+    H = coorbital_modes(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
+                        inputs["kappa1"], inputs["kappa2"])
+    h = rotate_modes(H, evolution.R, ell_max)
+    distance_Mpc = None
+    if distance is not None:
+        distance_Mpc = _megaparsecs(distance)
+        h *= _scale(None, distance_Mpc, inputs["M_seconds"])
+    return Modes(t=evolution.t, t_seconds=evolution.t_seconds, ell_m=_ell_m(ell_max), data=h, frame="inertial",
+                 R=evolution.R, Phi=evolution.Phi, distance_Mpc=distance_Mpc,
+                 inputs=dict(inputs, ell_max=ell_max, amplitude_order=order2 / 2,
+                             distance_Mpc=np.nan if distance_Mpc is None else distance_Mpc))

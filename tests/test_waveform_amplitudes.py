@@ -1,0 +1,112 @@
+"""Co-orbital mode amplitudes (pnrotor.waveform.amplitudes, .nonspinning, .spin) against the PN energy flux
+and their symmetries.
+
+The flux carried by the modes of a quasi-circular binary, F = (1/16π) Σ_ℓm |ḣ_ℓm|² with ḣ_ℓm = −imΩ h_ℓm
+(Ω = v³, units r h/M, M = 1; the amplitudes' own time dependence enters at 5PN), must reproduce the PN
+flux F = (32/5) ν² v¹⁰ F̂(v) of pnrotor.pn.flux (Blanchet's Living Review Eq. (314), Marsat et al. 2014,
+Bohé et al. 2015) coefficient by coefficient through the amplitude order: an independent check of every
+amplitude's magnitude and of the relative phases of its terms, computed exactly from the amplitude table.
+"""
+
+import numpy as np
+import pytest
+
+from pnrotor.pn import flux, series
+from pnrotor.waveform import amplitudes
+from pnrotor.waveform.amplitudes import coorbital_modes
+from pnrotor.waveform.layout import ell_m, mode_index
+
+MASSES = [(10.0, 10.0), (30.0, 10.0), (50.0, 5.0)]
+
+
+def mode_flux_series(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0)):
+    """(F̂ coefficients of v^j, of v^j ln v), j ≤ order2, from the amplitudes' own table with aligned spins
+    χᵢ = aᵢ ℓ̂: with H_ℓm = h₀ Σ_k v^k (A_k + B_k ln v), h₀ = 8√(π/5) ν v², the flux relative to
+    (32/5) ν² v¹⁰ is F̂ = (1/8) Σ_ℓm m² |Σ_k v^k (A_k + B_k ln v)|², exactly, as polynomials."""
+    M = m1 + m2
+    X1, X2 = m1 / M, m2 / M
+    spins = bool(a1 or a2)
+    rows, ks, qs, cs = amplitudes.table(X1 * X2, X1 - X2, 8, order2, spins)
+    q = np.zeros(amplitudes.N_Q)
+    q[0] = 1.0
+    q[2 + 2] = X1 * X1 * a1 + X2 * X2 * a2                                   # S_ell
+    q[5 + 2] = X2 * a2 - X1 * a1                                             # Sigma_ell
+    q[8 + 2] = kappa[0] * X1 * X1 * a1 * a1 + 2 * X1 * X2 * a1 * a2 + kappa[1] * X2 * X2 * a2 * a2   # P_ellell
+    A = np.zeros((len(ell_m(8)), 8), dtype=complex)
+    B = np.zeros_like(A)
+    for row, k, qi, c in zip(rows, ks, qs, cs):
+        if qi == 1:
+            B[row, k] += c
+        else:
+            A[row, k] += c * q[qi]
+    f, flog = np.zeros(order2 + 1), np.zeros(order2 + 1)
+    for row, (_, m) in enumerate(ell_m(8)):
+        for k in range(8):
+            for kp in range(8):
+                if k + kp <= order2:
+                    f[k + kp] += m * m * (A[row, k] * np.conj(A[row, kp])).real / 8
+                    flog[k + kp] += m * m * 2 * (B[row, k] * np.conj(A[row, kp])).real / 8
+    return f, flog
+
+
+def pn_flux_coefficients(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0)):
+    C = flux.flux_series(m1 / (m1 + m2), *kappa)
+    b = series.basis_values(a1, a2, a1 * a2, a1 * a1, a2 * a2)
+    return (C[:, :, 0] @ b)[:order2 + 1], (C[:, :, 1] @ b)[:order2 + 1]
+
+
+@pytest.mark.parametrize("m1, m2", MASSES)
+def test_nonspinning_modes_carry_the_pn_flux_through_3_5pn(m1, m2):
+    """Every coefficient of F̂ through v⁷, with the 3PN logarithm (the 2.5PN and 3.5PN imaginary parts,
+    the tail's, do not reach the flux at these orders)."""
+    f, flog = mode_flux_series(m1, m2, 7)
+    g, glog = pn_flux_coefficients(m1, m2, 7)
+    np.testing.assert_allclose(f, g, rtol=0, atol=1e-12 * np.abs(g).max())
+    np.testing.assert_allclose(flog, glog, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("m1, m2", MASSES)
+@pytest.mark.parametrize("kappa", [(1.0, 1.0), (3.0, 6.0)])
+def test_aligned_spin_modes_carry_the_spin_orbit_and_spin_spin_flux(m1, m2, kappa):
+    """Spin-orbit at 1.5PN and spin-spin, with the κ quadrupole-monopole terms, at 2PN."""
+    for a1, a2 in ((0.7, -0.4), (0.0, 0.9), (-0.8, 0.0)):
+        f, _ = mode_flux_series(m1, m2, 4, a1, a2, kappa)
+        g, _ = pn_flux_coefficients(m1, m2, 4, a1, a2, kappa)
+        np.testing.assert_allclose(f, g, rtol=0, atol=1e-13)
+
+
+def test_nonprecessing_modes_have_reflection_symmetry_and_equal_mass_kills_odd_m():
+    v = np.linspace(0.1, 0.4, 5)
+    for chi in (None, (0.0, 0.0, 0.6)):
+        c = None if chi is None else np.tile(chi, (v.size, 1))
+        H = coorbital_modes(v, c, c, 30.0, 10.0, 8, 7)
+        for ell, m in ell_m(8):
+            np.testing.assert_allclose(H[mode_index(ell, -m)], (-1) ** ell * np.conj(H[mode_index(ell, m)]),
+                                       rtol=0, atol=1e-15)
+        E = coorbital_modes(v, c, c, 20.0, 20.0, 8, 7)
+        for ell, m in ell_m(8):
+            if m % 2:
+                assert np.all(E[mode_index(ell, m)] == 0)
+    assert np.all(coorbital_modes(v, None, None, 30.0, 10.0, 8, 7)[[mode_index(ell, 0) for ell in (2, 4, 6, 8)]] == 0)
+
+
+def test_in_plane_spins_break_the_symmetry_by_the_antisymmetric_terms():
+    """Precessing spins add terms with H_ℓ,−m = −(−1)^ℓ H*_ℓm (reflection through the orbital plane flips
+    in-plane spin components of a pseudovector): H − (−1)^ℓ conj(H at −m) is twice them."""
+    v = np.array([0.3])
+    chi1, chi2 = np.array([[0.5, 0.2, 0.1]]), np.array([[-0.3, 0.4, 0.0]])
+    H = coorbital_modes(v, chi1, chi2, 30.0, 10.0, 4, 4)
+    flipped = coorbital_modes(v, chi1 * [-1, -1, 1], chi2 * [-1, -1, 1], 30.0, 10.0, 4, 4)
+    for ell, m in ell_m(4):
+        np.testing.assert_allclose(flipped[mode_index(ell, m)], (-1) ** ell * np.conj(H[mode_index(ell, -m)]),
+                                   rtol=0, atol=1e-15)
+    assert abs(H[mode_index(2, 1), 0] - np.conj(H[mode_index(2, -1), 0])) > 1e-4
+
+
+def test_orders_and_modes_select_terms():
+    v = np.array([0.3])
+    full = coorbital_modes(v, None, None, 30.0, 10.0, 4, 7)
+    newtonian = coorbital_modes(v, None, None, 30.0, 10.0, 2, 0)
+    assert newtonian.shape == (5, 1) and full.shape == (21, 1)
+    assert newtonian[mode_index(2, 2), 0] == pytest.approx(8 * np.sqrt(np.pi / 5) * 0.1875 * 0.09, rel=1e-15)
+    assert np.count_nonzero(newtonian) == 2

@@ -1,0 +1,116 @@
+"""pnrotor.waveform.modes: inertial modes from the evolved frame, their symmetries, frames, rotation
+covariance, units and polarizations."""
+
+import numpy as np
+import pytest
+
+import pnrotor
+from pnrotor import quaternion as q
+from pnrotor.waveform.amplitudes import coorbital_modes
+from pnrotor.waveform.layout import ell_m, mode_index
+from pnrotor.waveform.modes import Modes, modes
+from pnrotor.waveform.wigner import wigner_D
+
+PRECESSING = dict(m1=30.0, m2=10.0, chi1=(0.5, 0.1, 0.3), chi2=(0.0, 0.4, -0.2), f_ref=40.0)
+DT = 1.0 / 4096
+
+
+def test_nonprecessing_modes_are_amplitudes_times_exp_minus_i_m_phi():
+    for chi in ((0.0, 0.0, 0.0), (0.0, 0.0, 0.6)):
+        run = pnrotor.evolve(30.0, 10.0, chi, chi, 30.0, sampling=DT)
+        h = modes(run)
+        chi_orbit = None if not any(chi) else np.tile(chi, (len(run), 1))
+        H = coorbital_modes(run.v, chi_orbit, chi_orbit, 30.0, 10.0, 8, 7)
+        scale = np.abs(h.mode(2, 2)).max()
+        for ell, m in h.ell_m:
+            np.testing.assert_allclose(h.mode(ell, m), H[mode_index(ell, m)] * np.exp(-1j * m * run.Phi),
+                                       rtol=0, atol=1e-12 * scale)
+            np.testing.assert_allclose(h.mode(ell, -m), (-1) ** ell * np.conj(h.mode(ell, m)), rtol=0,
+                                       atol=1e-12 * scale)
+
+
+def test_equal_mass_nonspinning_has_only_the_even_m_modes_the_amplitudes_allow():
+    from pnrotor.waveform import nonspinning
+    allowed = {(ell, s * m) for (ell, m) in nonspinning.terms(0.25, 0.0) for s in (1, -1) if m % 2 == 0}
+    h = modes(pnrotor.evolve(20.0, 20.0, (0, 0, 0), (0, 0, 0), 30.0, sampling="steps"))
+    nonzero = {(ell, m) for ell, m in h.ell_m if np.max(np.abs(h.mode(ell, m))) > 0}
+    assert nonzero == allowed and (3, 0) in nonzero and (2, 1) not in nonzero
+
+
+def test_rotating_the_binary_rotates_its_modes():
+    """ℓ̂, n̂ and spins rotated by a fixed rotor Q: the modes become 𝔇(Q) h, the evolution being the same
+    in the rotated frame (to the integrator's tolerance)."""
+    Q = q.normalize(np.array([0.3, -0.5, 0.7, 0.2]))
+    run = pnrotor.evolve(**PRECESSING, sampling=DT, atol=1e-13)
+    ell, n = q.rotate(Q, np.array([0.0, 0.0, 1.0])), q.rotate(Q, np.array([1.0, 0.0, 0.0]))
+    chi1, chi2 = q.rotate(Q, np.array(PRECESSING["chi1"])), q.rotate(Q, np.array(PRECESSING["chi2"]))
+    turned = pnrotor.evolve(**dict(PRECESSING, chi1=chi1, chi2=chi2), ell_hat=ell, n_hat=n, sampling=DT, atol=1e-13)
+    h, h_turned = modes(run), modes(turned)
+    N = min(len(run), len(turned))
+    expected = wigner_D(Q, 8) @ h.data[:, :N]
+    scale = np.abs(h.mode(2, 2)).max()
+    assert np.max(np.abs(h_turned.data[:, :N] - expected)) < 1e-8 * scale
+
+
+def test_frames_round_trip_and_coorbital_is_the_amplitudes():
+    run = pnrotor.evolve(**PRECESSING, sampling="steps")
+    h = modes(run, ell_max=4, amplitude_order=2)
+    co = h.in_frame("coorbital")
+    chi1 = q.rotate(q.conjugate(run.R), run.chi1)
+    chi2 = q.rotate(q.conjugate(run.R), run.chi2)
+    H = coorbital_modes(run.v, chi1, chi2, 30.0, 10.0, 4, 4)
+    scale = np.abs(H).max()
+    assert np.max(np.abs(co.data - H)) < 1e-13 * scale
+    for frame in ("coprecessing", "coorbital"):
+        back = h.in_frame(frame).in_frame("inertial")
+        assert np.max(np.abs(back.data - h.data)) < 1e-13 * scale
+    cp = h.in_frame("coprecessing").data            # coprecessing = coorbital turned back by Φ about ẑ
+    for ell, m in h.ell_m:
+        np.testing.assert_allclose(cp[mode_index(ell, m)], co.data[mode_index(ell, m)] * np.exp(-1j * m * run.Phi),
+                                   rtol=0, atol=1e-13 * scale)
+
+
+def test_polarizations_are_the_quadrupole_formula_at_leading_order():
+    """ℓ = 2, Newtonian amplitude, nonspinning: h₊ = (M/D) 2ν v² (1 + cos²ι) cos 2(Φ − φ),
+    h× = (M/D) 4ν v² cos ι sin 2(Φ − φ), seen from φ = π/2 − φ_ref."""
+    astropy_units = pytest.importorskip("astropy.units")
+    from astropy import constants
+    run = pnrotor.evolve(30.0, 10.0, (0, 0, 0), (0, 0, 0), 30.0, sampling=DT)
+    h = modes(run, ell_max=2, amplitude_order=0)
+    nu, v, D = 0.1875, run.v, 400.0
+    M_over_D = run.inputs["M_seconds"] * constants.c.value / (D * astropy_units.Mpc.to(astropy_units.m))
+    for iota, phi_ref in ((0.3, 0.0), (1.2, 0.7), (np.pi, 2.0)):
+        hp, hc = h.polarizations(iota, phi_ref, distance=D)
+        x = 2 * (run.Phi - (np.pi / 2 - phi_ref))
+        np.testing.assert_allclose(hp, M_over_D * 2 * nu * v ** 2 * (1 + np.cos(iota) ** 2) * np.cos(x),
+                                   rtol=0, atol=1e-12 * M_over_D)
+        np.testing.assert_allclose(hc, M_over_D * 4 * nu * v ** 2 * np.cos(iota) * np.sin(x),
+                                   rtol=0, atol=1e-12 * M_over_D)
+    strain = modes(run, ell_max=2, amplitude_order=0, distance=D * astropy_units.Mpc)
+    np.testing.assert_allclose(strain.data, M_over_D * h.data, rtol=1e-14)
+    hp2, _ = strain.polarizations(0.3, 0.0, distance=2 * D)
+    np.testing.assert_allclose(hp2, 0.5 * h.polarizations(0.3, 0.0, distance=D)[0], rtol=1e-14)
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(ell_max=9), "ell_max"), (dict(ell_max=1), "ell_max"), (dict(ell_max=True), "ell_max"),
+    (dict(amplitude_order=0.25), "amplitude_order"), (dict(amplitude_order=4.0), "amplitude_order"),
+    (dict(amplitude_order="x"), "amplitude_order"), (dict(distance=-1.0), "distance"),
+    (dict(distance=float("nan")), "distance"),
+])
+def test_bad_arguments_name_themselves(kw, message):
+    run = pnrotor.evolve(30.0, 10.0, (0, 0, 0), (0, 0, 0), 100.0, sampling="final")
+    with pytest.raises(ValueError, match=message):
+        modes(run, **kw)
+
+
+def test_modes_object():
+    h = modes(pnrotor.evolve(**PRECESSING, sampling="steps"), ell_max=3, amplitude_order=1)
+    assert isinstance(h, Modes) and h.ell_m == ell_m(3) and h.data.shape == (12, len(h.t))
+    assert h.inputs["ell_max"] == 3 and h.inputs["amplitude_order"] == 1.0 and h.inputs["m1_Msun"] == 30.0
+    with pytest.raises(ValueError, match="mode"):
+        h.mode(4, 0)
+    with pytest.raises(ValueError, match="distance"):
+        h.polarizations(0.1)
+    with pytest.raises(ValueError, match="frame"):
+        h.in_frame("lab")
