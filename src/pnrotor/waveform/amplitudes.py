@@ -80,7 +80,7 @@ def _sum_terms(v, chi1, chi2, nu, X1, X2, kappa1, kappa2, spins, row, k, q, c, H
         for p in range(1, 8):
             powers[p] = powers[p - 1] * v[i]
         for j in range(row.size):
-            H[row[j], i] += c[j] * (powers[k[j]] * quantities[q[j]])
+            H[i, row[j]] += c[j] * (powers[k[j]] * quantities[q[j]])
 
 
 def coorbital_modes(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0):
@@ -94,7 +94,7 @@ def coorbital_modes(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1
     if not spins:
         chi1 = chi2 = np.zeros((0, 3))   # not read
     v = np.ascontiguousarray(v, dtype=np.float64)
-    H = np.zeros((n_modes(ell_max), v.size), dtype=np.complex128)
+    H = np.zeros((v.size, n_modes(ell_max)), dtype=np.complex128)   # each sample's modes contiguous
     _sum_terms(v, np.ascontiguousarray(chi1, dtype=np.float64), np.ascontiguousarray(chi2, dtype=np.float64),
                nu, X1, X2, float(kappa1), float(kappa2), spins, *table(nu, delta, ell_max, order2, spins), H)
-    return H
+    return H.T

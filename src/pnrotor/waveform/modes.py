@@ -30,7 +30,7 @@ from pnrotor.waveform import polarizations as _pol
 from pnrotor.waveform.amplitudes import coorbital_modes
 from pnrotor.waveform.layout import ell_m as _ell_m
 from pnrotor.waveform.layout import mode_index
-from pnrotor.waveform.wigner import rotate_modes
+from pnrotor.waveform.wigner import rotate_about_z, rotate_modes, wigner_D
 
 __all__ = ["Modes", "modes", "FRAMES", "AMPLITUDE_ORDERS"]
 
@@ -136,6 +136,19 @@ def _check(ell_max, amplitude_order):
     return int(ell_max), int(order2)
 
 
+def _to_inertial(H, evolution, ell_max):
+    """h = 𝔇(R) H; for a nonprecessing run R = R₀ exp(Φẑ/2) with R₀ the initial frame, so h = 𝔇(R₀) (H e^{−imΦ})
+    and, in the default frame (R₀ = 1), just H e^{−imΦ}."""
+    inputs = evolution.inputs
+    if inputs["state"] != "aligned":
+        return rotate_modes(H, evolution.R, ell_max)
+    from pnrotor.pn.initial import frame_rotor
+
+    h = rotate_about_z(H, evolution.Phi, ell_max)
+    R0 = frame_rotor(np.asarray(inputs["ell_hat"]), np.asarray(inputs["n_hat"]))
+    return h if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]) else wigner_D(R0, ell_max) @ h
+
+
 def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
     """Inertial-frame modes h_ℓm of ``evolution`` (module docstring) for ℓ ≤ ``ell_max`` (2 … 8) with
     amplitude terms through ``amplitude_order`` (0 … 3.5 in steps of 0.5), as strain at ``distance``
@@ -143,12 +156,15 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
     ell_max, order2 = _check(ell_max, amplitude_order)
     inputs = evolution.inputs
     chi1 = chi2 = None
-    if inputs["spin_content"] != "nonspinning":
+    if inputs["state"] == "precessing":
         Rinv = q.conjugate(evolution.R)
         chi1, chi2 = q.rotate(Rinv, evolution.chi1), q.rotate(Rinv, evolution.chi2)
+    elif inputs["spin_content"] == "aligned":   # constant spins along ℓ̂
+        chi1, chi2 = (np.outer(np.ones(len(evolution)), [0.0, 0.0, np.dot(chi[0], evolution.ell_hat[0])])
+                      for chi in (evolution.chi1, evolution.chi2))
     H = coorbital_modes(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
                         inputs["kappa1"], inputs["kappa2"])
-    h = rotate_modes(H, evolution.R, ell_max)
+    h = _to_inertial(H, evolution, ell_max)
     distance_Mpc = None
     if distance is not None:
         distance_Mpc = _megaparsecs(distance)

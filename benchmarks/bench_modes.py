@@ -1,0 +1,89 @@
+"""Benchmark of waveform modes: pnrotor's evolve + modes against LALSuite's SpinTaylorT4 modes, same cases,
+same grid, same run.
+
+For every case of tests/pn_cases.py (BBH at q = 1, 3, 10, near-extremal spins and BNS; nonspinning,
+aligned, precessing), sampled at Δt = 1/4096 s from f_start to the end of the inspiral:
+
+* LAL: ``SimInspiralChooseTDModes(0, Δt, m1, m2, χ₁, χ₂, f_start, f_start, r, LALparams, lmax=4,
+  SpinTaylorT4)`` with PN amplitude order 3 (1.5PN) in LALparams (its orbit and its inertial modes);
+* pnrotor (ℓ ≤ 4): ``evolve(…, sampling=Δt, **lalsuite_orders("T4"))`` then ``modes(run, ell_max=4,
+  amplitude_order=1.5, distance=r)``;
+* pnrotor's default: the same evolution, ``modes(run)`` (ℓ ≤ 8, 3.5PN).
+
+Timings include the Python calls and freeing each call's own output; medians over interleaved rounds
+(LAL, ours, ours-default alternate case by case), robust on a shared machine.
+
+    python benchmarks/bench_modes.py [--rounds 7] [--cases NAME ...]
+"""
+
+import argparse
+import os
+import statistics
+import sys
+import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+from pn_cases import CASES  # noqa: E402
+
+DT = 1.0 / 4096
+DISTANCE_MPC = 100.0
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--rounds", type=int, default=7)
+    ap.add_argument("--cases", nargs="+", default=list(CASES))
+    args = ap.parse_args()
+
+    import lal
+    import lalsimulation as ls
+
+    from pnrotor import evolve, modes
+    from pnrotor.pn import lalsuite_orders
+
+    orders = lalsuite_orders("T4")
+    params = lal.CreateDict()
+    ls.SimInspiralWaveformParamsInsertPNAmplitudeOrder(params, 3)
+
+    def lal_modes(case):
+        m1, m2, c1, c2, f = case
+        node = ls.SimInspiralChooseTDModes(0.0, DT, m1 * lal.MSUN_SI, m2 * lal.MSUN_SI, *c1, *c2, f, f,
+                                           DISTANCE_MPC * 1e6 * lal.PC_SI, params, 4, ls.SpinTaylorT4)
+        return node.mode.data.length
+
+    def ours(case, **options):
+        m1, m2, c1, c2, f = case
+        return len(modes(evolve(m1, m2, c1, c2, f, sampling=DT, **orders), distance=DISTANCE_MPC, **options).t)
+
+    runs = {}
+    for name in args.cases:
+        case = CASES[name]
+        runs[name] = dict(samples=ours(case, ell_max=4, amplitude_order=1.5), lal_samples=lal_modes(case),
+                          lal=[], ours=[], full=[])
+        ours(case)
+    for _ in range(args.rounds):
+        for name in args.cases:
+            case, r = CASES[name], runs[name]
+            for key, call in (("lal", lambda: lal_modes(case)),
+                              ("ours", lambda: ours(case, ell_max=4, amplitude_order=1.5)),
+                              ("full", lambda: ours(case))):
+                t = time.perf_counter()
+                call()
+                r[key].append(time.perf_counter() - t)
+    print(f"LAL SpinTaylorT4 modes (l <= 4, 1.5PN) vs pnrotor evolve + modes; dt = 1/4096 s; "
+          f"median of {args.rounds} interleaved rounds (ms)")
+    print(f"{'case':26s} {'samples':>8s} {'LAL':>8s} {'l<=4':>8s} {'ratio':>6s} {'l<=8,3.5':>9s} {'ratio':>6s}")
+    worst, worst_full = [], []
+    for name, r in runs.items():
+        lal_ms, ours_ms, full_ms = (1e3 * statistics.median(r[k]) for k in ("lal", "ours", "full"))
+        worst.append(lal_ms / ours_ms)
+        worst_full.append(lal_ms / full_ms)
+        print(f"{name:26s} {r['samples']:8d} {lal_ms:8.2f} {ours_ms:8.2f} {lal_ms / ours_ms:6.2f} {full_ms:9.2f} "
+              f"{lal_ms / full_ms:6.2f}" + ("" if abs(r["samples"] - r["lal_samples"]) <= 1
+                                            else f"  (LAL {r['lal_samples']} samples)"))
+    print(f"LAL / pnrotor, l <= 4 at 1.5PN: min {min(worst):.2f}, median {statistics.median(worst):.2f}; "
+          f"pnrotor's default (l <= 8, 3.5PN): min {min(worst_full):.2f}, median {statistics.median(worst_full):.2f}")
+
+
+if __name__ == "__main__":
+    main()
