@@ -168,8 +168,8 @@ def wigner_D(R, ell_max):
 def rotate_modes(H, R, ell_max):
     """Modes h_ℓm = Σ_m' 𝔇^ℓ_{m m'}(R) H_ℓm' (n_modes, N) of modes H (n_modes, N) given in the frame of
     the rotors R (N, 4), for ℓ = 2 … ell_max in :func:`pnrotor.waveform.layout.mode_index` order.  The
-    result is the transpose of an (N, n_modes) array, each sample's modes contiguous (2.5× faster than
-    writing the rows)."""
+    result is the transpose of an (N, n_modes) array, each sample's modes contiguous (measured ~0.74 µs
+    per sample for ℓ ≤ 4 against 0.84 writing the rows; 3.2 µs for ℓ ≤ 8)."""
     H = np.asarray(H)
     R = np.ascontiguousarray(R, dtype=np.float64)
     if H.ndim != 2 or R.shape != (H.shape[1], 4) or H.shape[0] != n_modes(ell_max):
