@@ -17,8 +17,11 @@ collection has −2459/378 for the −2495/378 of Faye et al.  Checked (tests/te
 against the PN energy flux of :mod:`pnrotor.pn.flux`, coefficient by coefficient through 3.5PN (which
 is how the −2459/378 showed), and against LALSuite's SpinTaylor modes through 1.5PN for ℓ ≤ 4
 (tests/test_waveform_lal.py).  LALSuite's separate ``XLALSimInspiralPNMode{ℓ}{m}`` (Kidder 2008,
-arXiv:0710.0614) disagree with several terms, e.g. the 1PN correction of (4,4) has the opposite sign
-there, which the flux rules out.
+arXiv:0710.0614) agree term by term to ≤ 8e-15 for ℓ ≤ 6 but for these (tests/test_waveform_nonspinning.py,
+which also shows ours right each time): no 3PN term in the odd-m modes and (3,2); the 1PN corrections of
+(4,2), (4,3), (4,4) with the opposite sign; (3,3)'s 2PN ν² term with the opposite sign; an extra
+8(1 − 3ν) ln 2 in (4,2)'s 1.5PN tail term; no factor i in (4,3); (5,3) −√(2/3) times ours;
+(6,6)'s 1PN factor in (6,4); and the m = 0 memory constants (a placeholder 1.0 for (6,0)).
 
 Left out, on purpose:
 
