@@ -359,6 +359,38 @@ def test_writeback_thread_leaves_every_signal_to_the_main_thread(tmp_path, monke
     assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, [])   # the main thread's own mask
 
 
+def test_two_writers_of_a_new_path_never_both_succeed(tmp_path):
+    """300 pairs of finished temporary files published to the same new path at the same instant (a
+    barrier): exactly one of each pair succeeds, the other gets FileExistsError (issue 15: with a check
+    and a rename both could report success, 59 of 300 times)."""
+    import threading
+
+    for i in range(300):
+        target = tmp_path / f"run{i}.h5"
+        temporaries = [hdf5._temporary_beside(target) for _ in range(2)]
+        for n, temporary in enumerate(temporaries):
+            temporary.write_bytes(b"writer %d" % n)
+        barrier, results = threading.Barrier(2), []
+
+        def publish(temporary):
+            barrier.wait()
+            try:
+                hdf5._publish(temporary, target, overwrite=False)
+                results.append(temporary.name)
+            except FileExistsError:
+                temporary.unlink()
+
+        threads = [threading.Thread(target=publish, args=(t,)) for t in temporaries]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        assert len(results) == 1
+        winner = temporaries.index(tmp_path / results[0])
+        assert target.read_bytes() == b"writer %d" % winner
+    assert sorted(os.listdir(tmp_path)) == sorted(f"run{i}.h5" for i in range(300))
+
+
 def test_new_file_permissions_follow_the_umask(tmp_path):
     previous = os.umask(0o027)
     try:

@@ -329,9 +329,7 @@ def _replacing(path, overwrite, copy=False, durable=True):
         if writeback:
             writeback.join()
             _fsync(temporary)
-        if path.exists() and not overwrite:
-            raise FileExistsError(f"{path} appeared while it was written; pass overwrite=True (--overwrite) to replace")
-        os.replace(temporary, path)
+        _publish(temporary, path, overwrite)
     except BaseException:
         if writeback:
             writeback.join()
@@ -339,6 +337,26 @@ def _replacing(path, overwrite, copy=False, durable=True):
         raise
     if durable:
         _fsync(path.parent)
+
+
+def _publish(temporary, path, overwrite):
+    """Give the finished `temporary` file the name `path`: os.replace with `overwrite`, else os.link, which
+    fails if `path` exists at that instant, so of two writers of a new path exactly one succeeds (a check
+    then a rename let both report success); then the temporary name is removed."""
+    if overwrite:
+        os.replace(temporary, path)
+        return
+    message = f"{path} appeared while it was written; pass overwrite=True (--overwrite) to replace"
+    try:
+        os.link(temporary, path)
+    except FileExistsError:
+        raise FileExistsError(message) from None
+    except OSError:  # a filesystem without hard links: check, then rename (not atomic)
+        if path.exists():
+            raise FileExistsError(message) from None
+        os.replace(temporary, path)
+        return
+    os.unlink(temporary)
 
 
 _WRITEBACKS = {}
