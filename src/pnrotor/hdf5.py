@@ -317,19 +317,21 @@ def _replacing(path, overwrite, copy=False, durable=True):
     temporary = _temporary_beside(path)
     writeback = _Writeback(temporary) if durable else None
     try:
-        if copy:
-            shutil.copyfile(path, temporary)
-        with h5py.File(temporary, "r+" if copy else "w") as f:
+        with _Interrupts() as interrupts:
+            if copy:
+                shutil.copyfile(path, temporary)
+            with h5py.File(temporary, "r+" if copy else "w") as f:
+                if writeback:
+                    _WRITEBACKS[f.filename] = writeback
+                try:
+                    yield f
+                finally:
+                    _WRITEBACKS.pop(f.filename, None)
             if writeback:
-                _WRITEBACKS[f.filename] = writeback
-            try:
-                yield f
-            finally:
-                _WRITEBACKS.pop(f.filename, None)
-        if writeback:
-            writeback.join()
-            _fsync(temporary)
-        _publish(temporary, path, overwrite)
+                writeback.join()
+                _fsync(temporary)
+            interrupts.check()
+            _publish(temporary, path, overwrite)
     except BaseException:
         if writeback:
             writeback.join()
@@ -337,6 +339,37 @@ def _replacing(path, overwrite, copy=False, durable=True):
         raise
     if durable:
         _fsync(path.parent)
+
+
+class _Interrupts:
+    """While a file is written (in the main thread): SIGINT, SIGTERM and SIGHUP raise KeyboardInterrupt at
+    once, so the temporary file is removed (SIGTERM's and SIGHUP's default would kill the process and leave
+    it), and are remembered: one that Python swallowed because it arrived inside h5py's cleanup callbacks
+    ("Exception ignored ... KeyboardInterrupt") is raised again by `check` before the file is published."""
+
+    SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+    def __init__(self):
+        self.seen, self.previous = None, {}
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for signum in self.SIGNALS:
+                self.previous[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def _handle(self, signum, frame):
+        self.seen = signum
+        raise KeyboardInterrupt
+
+    def check(self):
+        if self.seen is not None:
+            raise KeyboardInterrupt
+
+    def __exit__(self, *exc):
+        for signum, handler in self.previous.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)  # None: not set from Python
+        return False
 
 
 def _publish(temporary, path, overwrite):
