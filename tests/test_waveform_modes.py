@@ -129,3 +129,30 @@ def test_modes_object():
         h.polarizations(0.1)
     with pytest.raises(ValueError, match="frame"):
         h.in_frame("lab")
+
+
+def test_modes_round_trip_through_hdf5_beside_their_run(tmp_path):
+    """hdf5.write/read of Modes (kind "Modes"), alone and as a group next to the run in a batch file:
+    bitwise; the complex data readable with plain h5py."""
+    import h5py
+    from test_hdf5 import assert_identical
+
+    from pnrotor import hdf5
+    run = pnrotor.evolve(**PRECESSING, sampling="steps")
+    for distance in (None, 250.0):
+        h = modes(run, ell_max=3, amplitude_order=2, distance=distance).in_frame("coprecessing")
+        hdf5.write(tmp_path / "modes.h5", h, overwrite=True)
+        back = hdf5.read(tmp_path / "modes.h5")
+        assert isinstance(back, Modes) and back.distance_Mpc == distance and back.frame == "coprecessing"
+        for name in ("t", "t_seconds", "data", "R", "Phi"):
+            np.testing.assert_array_equal(getattr(back, name), getattr(h, name))
+        assert back.ell_m == h.ell_m
+        assert_identical(back.inputs, h.inputs, "inputs")
+        with h5py.File(tmp_path / "modes.h5", "r") as f:
+            np.testing.assert_array_equal(f["data"][...], h.data)
+            assert f["data"].dtype == np.complex128 and f.attrs["kind"] == "Modes"
+    with hdf5.batch(tmp_path / "run_and_modes.h5") as runs:
+        runs.add("run", run)
+        runs.add("modes", modes(run, ell_max=2))
+    assert sorted(hdf5.list_runs(tmp_path / "run_and_modes.h5")) == ["modes", "run"]
+    np.testing.assert_array_equal(hdf5.read(tmp_path / "run_and_modes.h5", "modes").data, modes(run, ell_max=2).data)

@@ -51,6 +51,7 @@ SCHEMA_VERSION = 1
 KINDS = {
     "FrameHistory": "pnrotor.history:FrameHistory",
     "Evolution": "pnrotor.pn.evolve:Evolution",
+    "Modes": "pnrotor.waveform.modes:Modes",
 }
 """The ``kind`` attribute → ``module:class`` of the dataclass it names, imported when a file is read."""
 
@@ -85,6 +86,14 @@ UNITS = {
         "chi2": "1; dimensionless spin S2 / m2^2, inertial-frame components",
         "ell_hat": "1; unit normal to the orbital plane, inertial-frame components",
         "R": _ROTOR,
+    },
+    "Modes": {
+        "t": "M (G M / c^3, total mass M)",
+        "t_seconds": "s",
+        "data": "strain at distance_Mpc, or r h / M if distance_Mpc is absent; row k is mode (l, m) with "
+                "k = l (l + 1) + m - 4, l = 2 ... ell_max (LALSuite's convention)",
+        "R": _ROTOR,
+        "Phi": "rad; orbital phase",
     },
 }
 """``units`` attribute written on a run's top-level datasets, by kind and field."""

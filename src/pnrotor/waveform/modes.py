@@ -62,17 +62,20 @@ class Modes:
     Attributes
     ----------
     t, t_seconds : (N,) times in M and in s (those of the evolution)
-    ell_m : list of (ℓ, m), ℓ = 2 … ell_max, m = −ℓ … ℓ
+    ell_max : the modes are ℓ = 2 … ell_max, m = −ℓ … ℓ (their list: :attr:`ell_m`)
     data : (n_modes, N) complex, row k is the mode ell_m[k]
     frame : "inertial", "coprecessing" (ẑ = ℓ̂, no orbital phase) or "coorbital" (ẑ = ℓ̂, x̂ = n̂)
     R : (N, 4) the orbital-frame rotor, Phi : (N,) the orbital phase (to change frames)
     distance_Mpc : the distance of ``data`` as strain, or None for r h / M
     inputs : every input of the evolution and of :func:`modes`
+
+    ``pnrotor.hdf5.write(path, modes)`` stores them (kind ``Modes``, docs/hdf5-schema.md), e.g. beside their
+    run as another group of a batch file.
     """
 
     t: np.ndarray
     t_seconds: np.ndarray
-    ell_m: list
+    ell_max: int
     data: np.ndarray
     frame: str
     R: np.ndarray
@@ -81,8 +84,9 @@ class Modes:
     inputs: dict = field(default_factory=dict)
 
     @property
-    def ell_max(self):
-        return self.ell_m[-1][0]
+    def ell_m(self):
+        """[(ℓ, m), …] of the rows of ``data``."""
+        return _ell_m(self.ell_max)
 
     def mode(self, ell, m):
         """h_ℓm, (N,) complex."""
@@ -169,7 +173,7 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
     if distance is not None:
         distance_Mpc = _megaparsecs(distance)
         h *= _scale(None, distance_Mpc, inputs["M_seconds"])
-    return Modes(t=evolution.t, t_seconds=evolution.t_seconds, ell_m=_ell_m(ell_max), data=h, frame="inertial",
+    return Modes(t=evolution.t, t_seconds=evolution.t_seconds, ell_max=ell_max, data=h, frame="inertial",
                  R=evolution.R, Phi=evolution.Phi, distance_Mpc=distance_Mpc,
                  inputs=dict(inputs, ell_max=ell_max, amplitude_order=order2 / 2,
                              distance_Mpc=np.nan if distance_Mpc is None else distance_Mpc))
