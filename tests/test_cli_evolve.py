@@ -488,3 +488,32 @@ def test_lazy_exports():
     from pnrotor.pn.evolve import Evolution, evolve as pn_evolve
 
     assert pnrotor.evolve is pn_evolve and pnrotor.Evolution is Evolution
+
+
+def test_modes_written_beside_the_run(in_tmp, capsys):
+    """--modes: the file holds the run and its modes (groups run, modes), each equal to the API's bitwise."""
+    code, out, _ = evolve(capsys, *FAST, "--modes", "--ell-max", "3", "--amplitude-order", "2", "--distance", "50",
+                          "-o", "w.h5")
+    assert code == 0 and "modes          l <= 3, amplitude order 2, strain at 50 Mpc" in out
+    assert sorted(hdf5.list_runs(in_tmp / "w.h5")) == ["modes", "run"]
+    run = pnrotor.evolve(**FAST_KW)
+    assert_same_run(hdf5.read(in_tmp / "w.h5", "run"), run)
+    expected = pnrotor.modes(run, ell_max=3, amplitude_order=2, distance=50.0)
+    np.testing.assert_array_equal(hdf5.read(in_tmp / "w.h5", "modes").data, expected.data)
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--modes", "--ell-max", "9"], "ell_max must be an integer from 2 to 8"),
+    (["--modes", "--amplitude-order", "1.25"], "amplitude_order must be one of"),
+    (["--modes", "--distance", "-3"], "distance must be a finite positive"),
+])
+def test_bad_modes_options_exit_2_before_running(extra, message, in_tmp, capsys, monkeypatch):
+    monkeypatch.setattr(backends, "evolve_row", lambda params: pytest.fail("ran"))
+    code, _, err = evolve(capsys, *FAST, *extra, "-o", "w.h5")
+    assert code == 2 and message in err and os.listdir(in_tmp) == []
+
+
+def test_modes_with_batch_is_refused(in_tmp, capsys):
+    write_text(in_tmp / "p.csv", "m1,m2,chi1,chi2,f_ref\n30,10,\"0,0,0\",\"0,0,0\",100\n")
+    code, _, err = evolve(capsys, "--batch", "p.csv", "--modes")
+    assert code == 2 and "--modes applies to single runs only" in err

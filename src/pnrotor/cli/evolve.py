@@ -78,6 +78,15 @@ def add_parser(subparsers):
     output.add_argument("--checksum", action="store_true",
                         help="store a Fletcher-32 checksum per chunk, so damaged bytes are an error on reading "
                         "(about 2x the write time uncompressed)")
+    waves = parser.add_argument_group("waveform modes (one run)")
+    waves.add_argument("--modes", action="store_true",
+                       help="also compute the modes h_lm (pnrotor.modes) and write the file with two groups, "
+                       "run and modes")
+    waves.add_argument("--ell-max", type=int, default=8, metavar="L", help="modes l = 2 ... L, L <= 8 (default 8)")
+    waves.add_argument("--amplitude-order", type=float, default=3.5, metavar="A",
+                       help="PN amplitude order 0, 0.5, ..., 3.5 (default 3.5)")
+    waves.add_argument("--distance", type=float, metavar="MPC",
+                       help="store the modes as strain at this distance in Mpc (default: r h / M)")
     output.add_argument("-q", "--quiet", action="store_true",
                         help="print only the output file, failures and the batch's last line; no progress bar")
     batch = parser.add_argument_group("batch")
@@ -91,6 +100,8 @@ def add_parser(subparsers):
 
 def run(args):
     if args.batch is not None:
+        if args.modes:
+            raise UsageError("--modes applies to single runs only (not yet to --batch)")
         return _run_batch(args)
     for option in ("jobs", "scheduler"):
         if getattr(args, option) is not None:
@@ -134,15 +145,31 @@ def _run_one(args):
         params[key] = default if value is None else value
     params["sampling"] = parse_sampling(params["sampling"])
     path, default_folder = _output_path(args, default_name(params))
+    if args.modes:
+        from pnrotor.waveform import modes
+
+        wave_options = modes.check_arguments(args.ell_max, args.amplitude_order, args.distance)
 
     run = backends.evolve_row(params)
     if default_folder:
         path.parent.mkdir(exist_ok=True)
     from pnrotor import hdf5
 
-    hdf5.write(path, run, overwrite=args.overwrite, compression=args.compression, checksum=args.checksum)
+    storage = dict(compression=args.compression, checksum=args.checksum)
+    if args.modes:
+        ell_max, order2, distance = wave_options
+        h = modes.modes(run, ell_max, order2 / 2, distance)
+        with hdf5.batch(path, overwrite=args.overwrite, **storage) as groups:
+            groups.add("run", run)
+            groups.add("modes", h)
+    else:
+        hdf5.write(path, run, overwrite=args.overwrite, **storage)
     if not args.quiet:
         print("\n".join(summary(run, time.perf_counter() - start)))
+        if args.modes:
+            print(f"  modes          l <= {ell_max}, amplitude order {order2 / 2:g}, "
+                  + (f"strain at {distance:g} Mpc" if distance is not None else "r h / M")
+                  + " (groups run and modes)")
     print(f"wrote {path}")
     return 0
 

@@ -32,7 +32,7 @@ from pnrotor.waveform.layout import ell_m as _ell_m
 from pnrotor.waveform.layout import mode_index
 from pnrotor.waveform.wigner import rotate_about_z, rotate_modes, wigner_D
 
-__all__ = ["Modes", "modes", "FRAMES", "AMPLITUDE_ORDERS"]
+__all__ = ["Modes", "modes", "check_arguments", "FRAMES", "AMPLITUDE_ORDERS"]
 
 FRAMES = ("inertial", "coprecessing", "coorbital")
 AMPLITUDE_ORDERS = tuple(k / 2 for k in range(8))
@@ -128,7 +128,9 @@ class Modes:
         return scale * hp, scale * hc
 
 
-def _check(ell_max, amplitude_order):
+def check_arguments(ell_max, amplitude_order, distance=None):
+    """:func:`modes`' options checked → (ell_max, 2 × amplitude_order, distance in Mpc or None); a ValueError
+    naming the first bad one (callers check before computing a run)."""
     if isinstance(ell_max, bool) or not isinstance(ell_max, (int, np.integer)) or not 2 <= ell_max <= ELL_MAX:
         raise ValueError(f"ell_max must be an integer from 2 to {ELL_MAX}; got {ell_max!r}")
     try:
@@ -137,7 +139,7 @@ def _check(ell_max, amplitude_order):
         order2 = np.nan
     if isinstance(amplitude_order, bool) or not (order2 in range(8)):
         raise ValueError(f"amplitude_order must be one of 0, 0.5, ..., 3.5; got {amplitude_order!r}")
-    return int(ell_max), int(order2)
+    return int(ell_max), int(order2), None if distance is None else _megaparsecs(distance)
 
 
 def _to_inertial(H, evolution, ell_max):
@@ -157,7 +159,7 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
     """Inertial-frame modes h_ℓm of ``evolution`` (module docstring) for ℓ ≤ ``ell_max`` (2 … 8) with
     amplitude terms through ``amplitude_order`` (0 … 3.5 in steps of 0.5), as strain at ``distance``
     (Mpc or an astropy length) or, without one, as r h / M.  Returns :class:`Modes`."""
-    ell_max, order2 = _check(ell_max, amplitude_order)
+    ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
     inputs = evolution.inputs
     chi1 = chi2 = None
     if inputs["state"] == "precessing":
@@ -169,9 +171,7 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
     H = coorbital_modes(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
                         inputs["kappa1"], inputs["kappa2"])
     h = _to_inertial(H, evolution, ell_max)
-    distance_Mpc = None
-    if distance is not None:
-        distance_Mpc = _megaparsecs(distance)
+    if distance_Mpc is not None:
         h *= _scale(None, distance_Mpc, inputs["M_seconds"])
     return Modes(t=evolution.t, t_seconds=evolution.t_seconds, ell_max=ell_max, data=h, frame="inertial",
                  R=evolution.R, Phi=evolution.Phi, distance_Mpc=distance_Mpc,
