@@ -517,3 +517,17 @@ def test_modes_with_batch_is_refused(in_tmp, capsys):
     write_text(in_tmp / "p.csv", "m1,m2,chi1,chi2,f_ref\n30,10,\"0,0,0\",\"0,0,0\",100\n")
     code, _, err = evolve(capsys, "--batch", "p.csv", "--modes")
     assert code == 2 and "--modes applies to single runs only" in err
+
+
+def test_full_disk_is_one_line_and_leaves_no_file(in_tmp, capsys, monkeypatch):
+    """An OSError while writing (ENOSPC here, as h5py reports a full disk): exit 1, one line, no traceback,
+    neither the file nor a temporary one (issue 15: a 35-95-line traceback)."""
+    import errno
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", "w.h5")
+
+    monkeypatch.setattr(hdf5, "_put_run", full)
+    code, out, err = evolve(capsys, *FAST, "-o", "w.h5")
+    assert code == 1 and err.count("\n") == 1 and "No space left on device" in err and "Traceback" not in err
+    assert os.listdir(in_tmp) == []

@@ -5,7 +5,8 @@ One module per subcommand (`verify`, `bench`, `evolve`, `inspect`, `plot`), each
 an option several subcommands take is added by one helper here (`add_damping_option`).
 Errors in the user's input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``,
 ``IsADirectoryError``, or a `UsageError` raised by a subcommand) are printed as one line on stderr with
-exit status 2 and no traceback; Ctrl-C exits with 130.
+exit status 2 and no traceback; other failures of the system (``OSError``: a full disk, a permission) as
+one line with exit status 1; Ctrl-C (and SIGTERM or SIGHUP while a file is written) exits with 130.
 """
 
 import argparse
@@ -51,6 +52,9 @@ def main(argv=None):
     except KeyboardInterrupt:
         print(f"pnrotor {args.command}: interrupted", file=sys.stderr)
         return 130
+    except OSError as error:  # a full disk, a lost permission...: what the system said, in one line
+        print(f"pnrotor {args.command}: error: {error}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":
