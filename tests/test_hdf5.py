@@ -25,7 +25,7 @@ from pnrotor import __version__, hdf5
 from pnrotor.history import FrameHistory
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "hdf5-schema.md"
-TEMPORARY = re.compile(r".+\.[0-9a-f]{8}\.pnrotor-tmp$")
+TEMPORARY = re.compile(r".+\.[^.]+\.[0-9]+\.[0-9a-f]{8}\.pnrotor-tmp$")
 
 
 def frame_history(n=101, **changes):
@@ -412,6 +412,28 @@ def test_interrupt_swallowed_inside_a_cleanup_callback_still_stops_the_write(tmp
     with pytest.raises(KeyboardInterrupt):
         hdf5.write(tmp_path / "run.h5", frame_history())
     assert os.listdir(tmp_path) == []
+
+
+def test_a_later_write_sweeps_the_temporaries_of_dead_writers(tmp_path):
+    """NAME.HOST.PID.XXXXXXXX.pnrotor-tmp: the next write of NAME on this host removes those whose PID is no
+    longer alive, and keeps live writers', other hosts', other targets' and other files (issue 15: stale
+    temporaries of up to 566 MB were never removed)."""
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                              text=True, check=True)
+    dead = int(finished.stdout)
+    host = hdf5._HOST
+    names = {"dead": f"run.h5.{host}.{dead}.0123abcd.pnrotor-tmp",
+             "alive": f"run.h5.{host}.{os.getpid()}.89abcdef.pnrotor-tmp",
+             "other host": f"run.h5.elsewhere.{dead}.0123abcd.pnrotor-tmp",
+             "other target": f"other.h5.{host}.{dead}.0123abcd.pnrotor-tmp",
+             "unrelated": "run.h5.notes.txt"}
+    for name in names.values():
+        (tmp_path / name).write_bytes(b"x")
+    hdf5.write(tmp_path / "run.h5", frame_history())
+    left = set(os.listdir(tmp_path))
+    assert names["dead"] not in left
+    assert {names[k] for k in ("alive", "other host", "other target", "unrelated")} <= left and "run.h5" in left
+    assert all(TEMPORARY.match(names[k]) for k in ("dead", "alive", "other target"))
 
 
 def test_new_file_permissions_follow_the_umask(tmp_path):

@@ -13,10 +13,11 @@ every write and read of it:
 * `read(path)` rebuilds the same dataclass, bitwise: arrays with their dtype and bytes, numbers as
   Python ``int``/``float``/``bool``, strings exactly.
 * Writes are atomic. The file is built under a temporary name beside the target,
-  ``NAME.XXXXXXXX.pnrotor-tmp``, fsynced (the writeback of each large dataset starts in a background thread
+  ``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp``, fsynced (the writeback of each large dataset starts in a background thread
   while the next is written), then renamed over the target with `os.replace`. Any exception,
   Ctrl-C included, removes the temporary file; only a hard kill (SIGKILL, power loss) can leave one,
-  and the target is then absent or still the old complete file.
+  and the target is then absent or still the old complete file; the next write of the same target on
+  that host removes the temporary files of writers no longer alive.
 * Batch files hold one run per top-level group (`list_runs`). `batch(path)` is the way to write many runs:
   a context manager whose `Batch` adds each run (`Batch.add`, or `Batch.copy_from` another file) to the
   temporary file, at the cost of that run alone, and renames the file into place on leaving the block
@@ -33,6 +34,7 @@ import dataclasses
 import importlib
 import os
 import signal
+import socket
 import secrets
 import shutil
 import threading
@@ -146,7 +148,7 @@ def batch(path, *, overwrite=False, compression=None, checksum=False, append=Fal
             for name, run in results:
                 runs.add(name, run)
 
-    The runs go into a file under a temporary name beside `path` (``NAME.XXXXXXXX.pnrotor-tmp``), each at
+    The runs go into a file under a temporary name beside `path` (``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp``), each at
     the cost of writing that run, whatever the size of the file. Leaving the block without an exception
     fsyncs it and renames it to `path`; an exception (Ctrl-C included) removes it, and `path` stays as it
     was. A batch to which no run was added writes nothing.
@@ -509,15 +511,49 @@ def _dataset(g, name, array, compression, checksum):
     return dataset
 
 
+_HOST = socket.gethostname().replace(".", "-").replace("/", "-") or "host"
+
+
 def _temporary_beside(path):
-    """Create and return an empty, new file ``NAME.XXXXXXXX.pnrotor-tmp`` in the folder of `path`."""
+    """Create and return an empty, new file ``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp`` in the folder of `path`,
+    after removing those of `path` that writers on this host left when they died (`_sweep`)."""
+    _sweep(path)
     while True:
-        temporary = path.with_name(f"{path.name}.{secrets.token_hex(4)}{_TEMPORARY_SUFFIX}")
+        temporary = path.with_name(f"{path.name}.{_HOST}.{os.getpid()}.{secrets.token_hex(4)}{_TEMPORARY_SUFFIX}")
         try:
             os.close(os.open(temporary, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
         except FileExistsError:
             continue
         return temporary
+
+
+def _sweep(path):
+    """Remove the temporary files of `path` whose writer ran on this host and is no longer alive (a kill -9
+    or a power loss leaves them); those of live writers, of other hosts and anything else are kept."""
+    prefix = f"{path.name}.{_HOST}."
+    try:
+        names = os.listdir(path.parent)
+    except OSError:
+        return
+    for name in names:
+        if not (name.startswith(prefix) and name.endswith(_TEMPORARY_SUFFIX)):
+            continue
+        pid = name[len(prefix):].split(".", 1)[0]
+        if pid.isdigit() and not _alive(int(pid)):
+            try:
+                (path.parent / name).unlink()
+            except (IsADirectoryError, PermissionError, FileNotFoundError):
+                pass
+
+
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, another user's
+        return True
+    return True
 
 
 def _fsync(path, sync=os.fsync):
