@@ -100,3 +100,47 @@ def test_rows_already_read_and_defaults_for_empty_cells(table, tmp_path):
     assert outcome.written == 3
     assert len(hdf5.read(tmp_path / "out.h5", "a")) == 1                   # the default filled the empty cell
     assert len(hdf5.read(tmp_path / "out.h5", "b")) > 1                    # its own 1/4096 s kept
+
+
+KILLED_BATCH = """
+import os, sys, time
+from pnrotor.batch import backends
+backends.evolve_row = lambda params: time.sleep(120)
+results = backends.results_pool([(i, {}) for i in range(4)], 2, context=sys.argv[1], chunksize=1)
+print(" ".join(str(p.pid) for p in results.gi_frame.f_locals["pool"]._processes.values()), flush=True)
+next(results)
+"""
+
+
+@pytest.mark.parametrize("context", ["fork", "forkserver"])
+def test_workers_die_with_a_killed_batch(context):
+    """kill -9 of the batch process: its pool workers go too, within seconds (issue 15: two orphan workers
+    blocked forever, 8 of 8 times)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    parent = subprocess.Popen([sys.executable, "-c", KILLED_BATCH, context], stdout=subprocess.PIPE, text=True)
+    try:
+        workers = [int(pid) for pid in parent.stdout.readline().split()]
+        assert len(workers) == 2
+        parent.send_signal(signal.SIGKILL)
+        parent.wait(timeout=30)
+        deadline = time.monotonic() + 20
+        alive = workers
+        while alive and time.monotonic() < deadline:
+            time.sleep(0.1)
+            alive = [pid for pid in workers if _alive(pid)]
+        assert alive == []
+    finally:
+        parent.kill()
+        parent.stdout.close()
+
+
+def _alive(pid):
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(")")[-1].split()[0] != "Z"   # a zombie has exited
+    except FileNotFoundError:
+        return False
