@@ -144,3 +144,12 @@ def _alive(pid):
             return f.read().split(")")[-1].split()[0] != "Z"   # a zombie has exited
     except FileNotFoundError:
         return False
+
+
+def test_dask_cluster_without_workers_fails_after_the_stated_timeout(table, tmp_path, monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr(batch.backends, "SCHEDULER_TIMEOUT", "1s")
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+        with pytest.raises(ValueError, match=r"has no workers \(waited 1s\)"):
+            batch.run(table, tmp_path / "out.h5", scheduler=cluster.scheduler_address)
+    assert os.listdir(tmp_path) == ["binaries.csv"]

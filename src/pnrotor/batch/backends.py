@@ -203,6 +203,11 @@ def results_dask(tasks, address):
         client = Client(address, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
     except (OSError, TimeoutError) as error:
         raise ValueError(f"cannot connect to the Dask scheduler at {address}: {error}") from None
+    try:  # tasks given to a cluster without workers would wait forever
+        client.wait_for_workers(1, timeout=SCHEDULER_TIMEOUT)
+    except (OSError, TimeoutError):
+        client.close()
+        raise ValueError(f"the Dask scheduler at {address} has no workers (waited {SCHEDULER_TIMEOUT})") from None
     return _dask_results(client, tasks)
 
 
