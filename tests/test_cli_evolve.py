@@ -531,3 +531,18 @@ def test_full_disk_is_one_line_and_leaves_no_file(in_tmp, capsys, monkeypatch):
     code, out, err = evolve(capsys, *FAST, "-o", "w.h5")
     assert code == 1 and err.count("\n") == 1 and "No space left on device" in err and "Traceback" not in err
     assert os.listdir(in_tmp) == []
+
+
+def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
+    """With no compiled DOP853 core in numba's cache (an empty NUMBA_CACHE_DIR), one line on stderr says
+    that the kernels are being compiled, once; with the cache filled, nothing."""
+    from pnrotor.cli import evolve as cli_evolve
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(in_tmp / "empty-cache"))
+    cli_evolve._warn_if_cold()
+    assert capsys.readouterr().err == ("pnrotor: compiling its numba kernels for this machine, once (~30 s); "
+                                       "later runs load them in ~1 s\n")
+    core = in_tmp / "empty-cache" / "ode_0123" / "dop853._dop853_core-495.py311.nbi"
+    core.parent.mkdir(parents=True)
+    core.touch()
+    cli_evolve._warn_if_cold()
+    assert capsys.readouterr().err == ""

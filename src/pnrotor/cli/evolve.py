@@ -98,6 +98,15 @@ def add_parser(subparsers):
     parser.set_defaults(func=run)
 
 
+def _warn_if_cold():
+    """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent half minute."""
+    from pnrotor import numba_cache
+
+    if numba_cache.is_cold():
+        print("pnrotor: compiling its numba kernels for this machine, once (~30 s); later runs load them in ~1 s",
+              file=sys.stderr, flush=True)
+
+
 def run(args):
     if args.batch is not None:
         if args.modes:
@@ -150,6 +159,7 @@ def _run_one(args):
 
         wave_options = modes.check_arguments(args.ell_max, args.amplitude_order, args.distance)
 
+    _warn_if_cold()
     run = backends.evolve_row(params)
     if default_folder:
         path.parent.mkdir(exist_ok=True)
@@ -240,6 +250,7 @@ def _run_batch(args):
         bad = len(plan.rows) - len(plan.tasks)
         print(f"pnrotor evolve --batch {args.batch}: {len(plan.rows)} binaries"
               + (f" ({bad} with bad values)" if bad else "") + f", on {plan.where}")
+    _warn_if_cold()
     outcome = plan.run(progress=not args.quiet and sys.stderr.isatty())
     if not args.quiet:
         print("\n".join(_batch_line(plan.rows[i], outcome.briefs[i]) for i in sorted(outcome.briefs)))
