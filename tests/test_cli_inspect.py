@@ -119,6 +119,19 @@ def test_plot_writes_a_png(files, which, capsys):
     assert_sensible_png(png, (850, 1200))
 
 
+def test_plot_draws_modes_and_polarizations(tmp_path, capsys):
+    """The modes group of `pnrotor evolve --modes`: |h_lm| and h+, hx from a chosen direction."""
+    pytest.importorskip("matplotlib")
+    import pnrotor
+    run = pnrotor.evolve(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 100.0, sampling=1 / 4096)
+    with hdf5.batch(tmp_path / "w.h5") as groups:
+        groups.add("run", run)
+        groups.add("modes", pnrotor.modes(run, ell_max=4, distance=100.0))
+    assert main(["plot", str(tmp_path / "w.h5"), "--group", "modes", "--inclination", "0.7"]) == 0
+    assert capsys.readouterr().out == f"wrote {tmp_path / 'w-modes.png'}\n"
+    assert_sensible_png(tmp_path / "w-modes.png", (850, 1200))
+
+
 def test_plot_long_run_and_batch_group(files, tmp_path, capsys):
     pytest.importorskip("matplotlib")
     hdf5.write(tmp_path / "long.h5", frame_history(n=200_001))

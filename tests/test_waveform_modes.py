@@ -125,8 +125,10 @@ def test_modes_object():
     assert h.inputs["ell_max"] == 3 and h.inputs["amplitude_order"] == 1.0 and h.inputs["m1_Msun"] == 30.0
     with pytest.raises(ValueError, match="mode"):
         h.mode(4, 0)
-    with pytest.raises(ValueError, match="distance"):
-        h.polarizations(0.1)
+    hp, hc = h.polarizations(0.1)          # no distance anywhere: r h / M
+    strain_hp, _ = h.polarizations(0.1, distance=100.0)
+    np.testing.assert_allclose(strain_hp, hp * h.inputs["M_seconds"] * 299792458.0 / 3.0856775814913673e24,
+                               rtol=1e-12)
     with pytest.raises(ValueError, match="frame"):
         h.in_frame("lab")
 

@@ -81,7 +81,8 @@ def add_parser(subparsers):
     waves = parser.add_argument_group("waveform modes (one run)")
     waves.add_argument("--modes", action="store_true",
                        help="also compute the modes h_lm (pnrotor.modes) and write the file with two groups, "
-                       "run and modes")
+                       "run and modes; for a waveform sample finely (--sampling 1/4096 or per_orbit:16): the "
+                       "default steps are far apart")
     waves.add_argument("--ell-max", type=int, default=8, metavar="L", help="modes l = 2 ... L, L <= 8 (default 8)")
     waves.add_argument("--amplitude-order", type=float, default=3.5, metavar="A",
                        help="PN amplitude order 0, 0.5, ..., 3.5 (default 3.5)")

@@ -6,8 +6,10 @@ sphere and its components, the rotor components w, x, y, z against t, and for ru
 samples the rotor components of the first `ZOOM` samples. Frame histories of the paper's precessing and
 nutating binary (those of ``pnrotor verify -o``, whose inputs describe it:
 `PrecessingNutatingBinary.from_inputs`) add the frame error δ(t) of eq:error_norm against its exact
-rotor, on a log scale, with its maximum. Lines of more than `MAX_POINTS` samples are drawn from every
-k-th sample (δ: the largest of each k samples), and the panel says so.
+rotor, on a log scale, with its maximum. Waveform modes (``pnrotor evolve --modes``, group ``modes``):
+|h_ℓm|(t) of the modes that reach 1e-3 of max |h₂₂|, and h₊, h× seen from ``--inclination`` and
+``--phi-ref``. Lines of more than `MAX_POINTS` samples are drawn from every k-th sample (δ: the largest
+of each k samples), and the panel says so.
 
 numpy, h5py, matplotlib and pnrotor's numba code are imported only when the command runs, so that the CLI
 starts quickly.
@@ -31,7 +33,11 @@ def add_parser(subparsers):
     )
     parser.add_argument("file", help="a pnrotor HDF5 file, e.g. waveforms/NAME.h5")
     parser.add_argument("-o", "--output", metavar="PNG", help="image to write, replaced if present (default: FILE with .png)")
-    parser.add_argument("--group", metavar="NAME", help="the run NAME of a batch file")
+    parser.add_argument("--group", metavar="NAME", help="the run NAME of a batch file (modes: --group modes)")
+    parser.add_argument("--inclination", type=float, default=0.0, metavar="RAD",
+                        help="modes: the line of sight's inclination for h+ and hx (default 0)")
+    parser.add_argument("--phi-ref", type=float, default=0.0, metavar="RAD",
+                        help="modes: the reference phase of the line of sight, LALSuite's convention (default 0)")
     parser.set_defaults(func=run)
 
 
@@ -46,12 +52,15 @@ def run(args):
     from pnrotor import hdf5
 
     result = hdf5.read(args.file, args.group)
+    kind = type(result).__name__
     post_newtonian = all(hasattr(result, name) for name in ("ell_hat", "v", "chi1", "chi2"))
-    binary = None if post_newtonian else _binary(result)
+    binary = None if post_newtonian or kind == "Modes" else _binary(result)
     figure = Figure(figsize=(12, 8.5 if binary is None else 12.5), layout="constrained")
     title = args.file if args.group in (None, "/") else f"{args.file} run {args.group!r}"
-    figure.suptitle(f"{title}: {type(result).__name__}")
-    if post_newtonian:
+    figure.suptitle(f"{title}: {kind}")
+    if kind == "Modes":
+        _modes(figure, result, args.inclination, args.phi_ref)
+    elif post_newtonian:
         _post_newtonian(figure, result)
     else:
         _frame_history(figure, result, binary)
@@ -77,6 +86,33 @@ def _post_newtonian(figure, result):
             axes.plot(t, getattr(result, name)[::every, component], label=f"{symbol}{label}")
         axes.set(xlabel="t [M]", ylabel=symbol, title=f"{symbol} components (inertial frame)")
         axes.legend(loc="best")
+
+
+def _modes(figure, modes, inclination, phi_ref):
+    """|h_ℓm|(t) of the modes reaching 1e-3 of max |h₂₂| (log scale), and h₊, h× from (ι, φ_ref)."""
+    import numpy as np
+
+    every = _stride(modes.t.size)
+    t = modes.t[::every]
+    inertial = modes.in_frame("inertial")
+    unit = "strain" if modes.distance_Mpc is not None else "r h / M"
+    amplitudes = figure.add_subplot(2, 1, 1)
+    floor = 1e-3 * np.abs(inertial.mode(2, 2)).max()
+    for ell, m in modes.ell_m:
+        magnitude = np.abs(inertial.mode(ell, m))
+        if m >= 0 and magnitude.max() > floor:
+            amplitudes.semilogy(t, magnitude[::every], lw=0.8, label=f"({ell},{m})")
+    amplitudes.set(xlabel="t [M]", ylabel=f"|h_lm| [{unit}]",
+                   title=f"inertial modes, m ≥ 0, those above 1e-3 of max |h22| ({modes.frame} frame stored)"
+                   f"{_sampling(every)}")
+    amplitudes.legend(loc="upper left", ncol=6, fontsize="small")
+    plus, cross = modes.polarizations(inclination, phi_ref)
+    waves = figure.add_subplot(2, 1, 2)
+    waves.plot(t, plus[::every], lw=0.6, label="h+")
+    waves.plot(t, cross[::every], lw=0.6, label="hx")
+    waves.set(xlabel="t [M]", ylabel=unit, title=f"polarizations, inclination {inclination:g} rad, "
+              f"phi_ref {phi_ref:g} rad{_sampling(every)}")
+    waves.legend(loc="upper left")
 
 
 def _binary(result):

@@ -115,14 +115,13 @@ class Modes:
         return replace(self, data=rotate_modes(self.data, rotor, self.ell_max), frame=frame)
 
     def polarizations(self, inclination, phi_ref=0.0, distance=None, psi=0.0):
-        """Strain h₊, h× (N,) seen from the direction (θ, φ) = (ι, π/2 − φ_ref) of the inertial frame — the
-        direction LALSuite gives a line of sight with inclination ι and reference phase φ_ref when it
-        builds polarizations from modes (``azimuthal = LAL_PI_2 - phiRef`` in LALSimInspiral.c) — at
-        ``distance`` (Mpc or an astropy length; default the modes' own), polarization angle ψ."""
-        if distance is None and self.distance_Mpc is None:
-            raise ValueError("distance: these modes are r h / M; give a distance (Mpc) for strain")
+        """h₊, h× (N,) seen from the direction (θ, φ) = (ι, π/2 − φ_ref) of the inertial frame — the direction
+        LALSuite gives a line of sight with inclination ι and reference phase φ_ref when it builds
+        polarizations from modes (``azimuthal = LAL_PI_2 - phiRef`` in LALSimInspiral.c) — polarization
+        angle ψ: strain at ``distance`` (Mpc or an astropy length; default the modes' own), or r h / M when
+        neither gives a distance."""
         to_Mpc = self.distance_Mpc if distance is None else _megaparsecs(distance)
-        scale = _scale(self.distance_Mpc, to_Mpc, self.inputs["M_seconds"])
+        scale = 1.0 if to_Mpc is None else _scale(self.distance_Mpc, to_Mpc, self.inputs["M_seconds"])
         data = self.in_frame("inertial").data
         hp, hc = _pol.polarizations(data, self.ell_m, inclination, 0.5 * np.pi - phi_ref, psi)
         return scale * hp, scale * hc
