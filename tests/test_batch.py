@@ -79,19 +79,83 @@ def test_existing_output_refused_before_running_unless_overwrite(table, tmp_path
     assert out.read_bytes() == b"keep"
 
 
-def test_interrupt_leaves_no_file(table, tmp_path, monkeypatch):
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_interrupted_batch_keeps_its_finished_runs_and_resumes(table, tmp_path, monkeypatch, jobs):
+    """Ctrl-C at the third run: no batch file, the finished runs in OUT.parts; resume=True computes only
+    the others and the file equals an uninterrupted batch's bitwise (issue 15: every finished run was lost)."""
     real, calls = batch.backends.evolve_row, []
 
-    def interrupt_second(params):
+    def interrupt_third(params):
         calls.append(params)
-        if len(calls) == 2:
+        if len(calls) == 3:
             raise KeyboardInterrupt
         return real(params)
 
-    monkeypatch.setattr(batch.backends, "evolve_row", interrupt_second)
+    monkeypatch.setattr(batch.backends, "evolve_row", interrupt_third)
+    with pytest.raises(KeyboardInterrupt, match="finished runs? kept in .*out.h5.parts; complete the batch"):
+        batch.run(table, tmp_path / "out.h5", jobs=1)
+    assert sorted(os.listdir(tmp_path)) == ["binaries.csv", "out.h5.parts"]
+    with pytest.raises(FileExistsError, match="pass --resume"):
+        batch.plan(table, tmp_path / "out.h5")
+    monkeypatch.setattr(batch.backends, "evolve_row", lambda params: calls.append(params) or real(params))
+    outcome = batch.run(table, tmp_path / "out.h5", jobs=jobs, resume=True)
+    if jobs == 1:                # (workers' calls are not seen here)
+        assert len(calls) == 3 + 2   # the two finished before the interrupt are not computed again
+    assert outcome.written == 3 and sorted(outcome.briefs) == [0, 1, 3]
+    assert sorted(os.listdir(tmp_path)) == ["binaries.csv", "out.h5"]
+    for name, kw in zip("abc", ROWS):
+        assert_same_run(hdf5.read(tmp_path / "out.h5", name), pnrotor.evolve(**kw))
+
+
+def test_resume_refuses_the_runs_of_another_table(table, tmp_path, monkeypatch):
+    def interrupt(params):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(batch.backends, "evolve_row", interrupt)
     with pytest.raises(KeyboardInterrupt):
         batch.run(table, tmp_path / "out.h5", jobs=1)
-    assert os.listdir(tmp_path) == ["binaries.csv"]
+    table.write_text(CSV.replace("120,,T5,c", "125,,T5,c"))
+    with pytest.raises(ValueError, match="holds runs of another table"):
+        batch.run(table, tmp_path / "out.h5", jobs=1, resume=True)
+
+
+KILLED_SERIAL = """
+import sys, time
+from pnrotor import batch
+real, count = batch.backends.evolve_row, [0]
+def slow_after_two(params):
+    count[0] += 1
+    if count[0] == 3:
+        print("two done", flush=True)
+        time.sleep(120)
+    return real(params)
+batch.backends.evolve_row = slow_after_two
+batch.run(sys.argv[1], sys.argv[2], jobs=1)
+"""
+
+
+def test_batch_killed_with_sigkill_resumes(table, tmp_path):
+    """kill -9 while the third row runs: the two finished runs survive in OUT.parts and resume completes the
+    batch, equal to single evolve calls."""
+    import signal
+    import subprocess
+    import sys
+
+    out = tmp_path / "out.h5"
+    process = subprocess.Popen([sys.executable, "-c", KILLED_SERIAL, str(table), str(out)], stdout=subprocess.PIPE,
+                               text=True)
+    try:
+        assert process.stdout.readline() == "two done\n"
+        process.send_signal(signal.SIGKILL)
+        process.wait(timeout=30)
+    finally:
+        process.kill()
+        process.stdout.close()
+    assert not out.exists() and len(list((tmp_path / "out.h5.parts").glob("run-*.h5"))) == 2
+    outcome = batch.run(table, out, jobs=1, resume=True)
+    assert outcome.written == 3
+    for name, kw in zip("abc", ROWS):
+        assert_same_run(hdf5.read(out, name), pnrotor.evolve(**kw))
 
 
 def test_rows_already_read_and_defaults_for_empty_cells(table, tmp_path):

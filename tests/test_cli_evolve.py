@@ -439,7 +439,7 @@ def test_progress_bar_on_a_terminal_and_quiet(in_tmp, capsys, monkeypatch):
     assert code == 1 and err == "" and len(out.splitlines()) == 2 and "FAILED row 3" in out
 
 
-def test_interrupted_batch_leaves_no_file(in_tmp, capsys, monkeypatch):
+def test_interrupted_batch_keeps_finished_runs_for_resume(in_tmp, capsys, monkeypatch):
     write_text(in_tmp / "p.csv", CSV)
     real = backends.evolve_row
     calls = []
@@ -452,8 +452,15 @@ def test_interrupted_batch_leaves_no_file(in_tmp, capsys, monkeypatch):
 
     monkeypatch.setattr(backends, "evolve_row", interrupt_second)
     code, _, err = evolve(capsys, "--batch", "p.csv", "--jobs", "1")
-    assert code == 130 and err == "pnrotor evolve: interrupted\n" and len(calls) == 2
-    assert os.listdir(in_tmp / "waveforms") == []  # the first run was written, to a temporary file, now removed
+    assert code == 130 and len(calls) == 2
+    assert err == ("pnrotor evolve: interrupted; 1 finished run kept in waveforms/p.h5.parts; complete the "
+                   "batch with --resume (resume=True)\n")
+    assert os.listdir(in_tmp / "waveforms") == ["p.h5.parts"]   # no batch file yet
+    monkeypatch.undo()
+    monkeypatch.chdir(in_tmp)
+    code, out, _ = evolve(capsys, "--batch", "p.csv", "--jobs", "1", "--resume")
+    assert code == 1 and "wrote 4 runs to waveforms/p.h5" in out
+    assert os.listdir(in_tmp / "waveforms") == ["p.h5"]
 
 
 def test_dask_cluster_batch_equals_local(in_tmp, capsys):

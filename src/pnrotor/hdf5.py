@@ -325,7 +325,7 @@ def _replacing(path, overwrite, copy=False, durable=True):
     thread (`_Writeback`) while the next one is encoded, so that the final fsync waits for the last ones only
     (10⁶-sample `Evolution`, 136 MB contiguous, best of 5: 0.100 s in h5py with one fsync at the end, 0.084 s
     so)."""
-    temporary = _temporary_beside(path)
+    temporary = _temporary_beside(path, sweep=durable)
     writeback = _Writeback(temporary) if durable else None
     try:
         with _Interrupts() as interrupts:
@@ -514,10 +514,12 @@ def _dataset(g, name, array, compression, checksum):
 _HOST = socket.gethostname().replace(".", "-").replace("/", "-") or "host"
 
 
-def _temporary_beside(path):
+def _temporary_beside(path, sweep=True):
     """Create and return an empty, new file ``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp`` in the folder of `path`,
-    after removing those of `path` that writers on this host left when they died (`_sweep`)."""
-    _sweep(path)
+    after removing those of `path` that writers on this host left when they died (`_sweep`; not for scratch
+    files, written by the thousand into one folder, where listing it each time would cost N²)."""
+    if sweep:
+        _sweep(path)
     while True:
         temporary = path.with_name(f"{path.name}.{_HOST}.{os.getpid()}.{secrets.token_hex(4)}{_TEMPORARY_SUFFIX}")
         try:

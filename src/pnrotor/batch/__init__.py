@@ -5,19 +5,23 @@ runs start, ``plan(…)`` then ``Plan.run()``) is what ``pnrotor evolve --batch`
 
 * :mod:`~pnrotor.batch.table` — the CSV/TOML file → rows of `pnrotor.evolve` keywords, checked first;
 * :mod:`~pnrotor.batch.backends` — serial, local worker processes or a Dask cluster;
-* here — the writer: this process alone writes the batch file with `pnrotor.hdf5.batch`, each result as it
-  arrives (local workers write part files whose groups it copies), under a temporary name renamed to
-  ``output`` only when the batch is complete, so an interrupt never leaves a partial file.  Ctrl-C is
-  deferred while HDF5 writes (see :class:`_InterruptFlag`) and stops the workers.
+* here — the writer.  Every finished run is on disk at once, in the folder ``OUTPUT.parts`` beside the
+  output: local workers write their runs into part files there, and this process writes those of the
+  serial and Dask backends.  When every row is done, this process alone assembles the batch file with
+  `pnrotor.hdf5.batch` (HDF5's object copy of each run), atomically, and removes the folder.  Whatever
+  stops a batch (Ctrl-C, SIGTERM, kill -9, a crash), the finished runs stay in ``OUTPUT.parts`` and
+  ``resume=True`` (``pnrotor evolve --batch F --resume``) computes only the others, after checking that
+  the table is the one that made them.  Ctrl-C is deferred while HDF5 writes (:class:`_InterruptFlag`)
+  and stops the workers.
 
 A row that fails keeps its message in :attr:`~pnrotor.batch.table.Row.error`; the others are written.
 """
 
 import contextlib
+import hashlib
 import os
 import shutil
 import sys
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -56,6 +60,7 @@ class Plan:
     overwrite: bool = False
     storage: dict = field(default_factory=dict)
     create_folder: bool = False
+    resume: bool = False
 
     @property
     def tasks(self):
@@ -69,60 +74,99 @@ class Plan:
             return "this process"
         return f"{min(self.jobs, len(self.tasks))} worker processes"
 
+    @property
+    def parts(self):
+        """The folder of finished runs, ``OUTPUT.parts``."""
+        return self.path.with_name(self.path.name + ".parts")
+
     def run(self, progress=False):
-        """Compute the rows and write the batch file (module docstring) → :class:`Outcome`; ``progress``
-        shows a tqdm bar on stderr."""
+        """Compute the rows (those not already in :attr:`parts` with ``resume``), then write the batch file
+        (module docstring) → :class:`Outcome`; ``progress`` shows a tqdm bar on stderr."""
         start = time.perf_counter()
-        tasks, parts = self.tasks, None
-        if self.scheduler is not None:
+        done = self._stored() if self.resume else {}
+        tasks = [(i, params) for i, params in self.tasks if i not in done]
+        if self.scheduler is not None:   # first: a scheduler it cannot use leaves nothing behind
             results = backends.results_dask(tasks, self.scheduler)
-        elif self.jobs == 1 or len(tasks) <= 1:
-            results = backends.results_serial(tasks)
-        else:
+        if self.tasks:
             self._make_folder()
-            parts = tempfile.mkdtemp(prefix=f"{self.path.name}.", suffix=".pnrotor-tmp", dir=self.path.parent)
-            results = backends.results_pool(tasks, self.jobs, parts=parts, storage=self.storage)
+            self.parts.mkdir(exist_ok=True)
+            (self.parts / _TABLE).write_text(self._fingerprint())
+        if self.scheduler is None:
+            results = (backends.results_serial(tasks) if self.jobs == 1 or len(tasks) <= 1 else
+                       backends.results_pool(tasks, self.jobs, parts=self.parts, storage=self.storage))
         briefs, evolve_seconds = {}, 0.0
         interrupted = _InterruptFlag()
         try:
-            # without a run to write no file is needed: an empty list stands in for the batch
-            batch = contextlib.nullcontext([])
-            if tasks:
-                from pnrotor import hdf5
-
-                self._make_folder()
-                batch = hdf5.batch(self.path, overwrite=self.overwrite, **self.storage)
-            with interrupted.deferred(), batch as writer, _progress_bar(len(tasks), enabled=progress) as bar:
+            with interrupted.deferred(), _progress_bar(len(tasks), enabled=progress) as bar:
                 for index, ok, result in interrupted.interruptible(results):
-                    row = self.rows[index]
                     if ok:
-                        if isinstance(result, backends.Stored):
-                            writer.copy_from(result.path, result.group, row.name)
-                            result = result.brief
-                        else:
-                            writer.add(row.name, result)
-                            result = backends.brief(result)
-                        evolve_seconds += result["wall_time_s"]
-                        briefs[index] = result
+                        if not isinstance(result, backends.Stored):   # this process's run: to its part file
+                            result = backends.store(result, self.parts, index, self.storage)
+                        done[index] = result
+                        evolve_seconds += result.brief["wall_time_s"]
                     else:
-                        row.error = result
+                        self.rows[index].error = result
                     bar.update()
+        except KeyboardInterrupt:
+            raise KeyboardInterrupt(f"{len(done)} finished run{'s' * (len(done) != 1)} kept in {self.parts}; "
+                                    "complete the batch with --resume (resume=True)") from None
         finally:
             results.close()  # stops the workers early after an error or Ctrl-C
-            if parts is not None:
-                shutil.rmtree(parts, ignore_errors=True)
             interrupted.restore()
-        written = len(writer)
+        written = self._assemble(done)
+        briefs = {index: stored.brief for index, stored in done.items()}
         return Outcome(self.rows, briefs, self.path if written else None, written, time.perf_counter() - start,
                        evolve_seconds)
+
+    def _assemble(self, done):
+        """The batch file from the finished runs, in row order; then the parts folder goes."""
+        if done:
+            from pnrotor import hdf5
+
+            with _InterruptFlag().deferred(), hdf5.batch(self.path, overwrite=self.overwrite, **self.storage) as out:
+                for index in sorted(done):
+                    out.copy_from(done[index].path, done[index].group, self.rows[index].name)
+        if self.parts.exists():
+            shutil.rmtree(self.parts)
+        return len(done)
+
+    def _fingerprint(self):
+        """What identifies the table: every row's name and parameters."""
+        text = "\n".join(f"{row.name}\t{sorted(row.params.items())!r}" for row in self.rows if row.error is None)
+        return hashlib.sha256(text.encode()).hexdigest() + "\n"
+
+    def _stored(self):
+        """{row index: Stored} of the runs already in :attr:`parts`, after checking they are this table's."""
+        from pnrotor import hdf5
+
+        if not self.parts.is_dir():
+            return {}
+        table = self.parts / _TABLE
+        if not table.exists() or table.read_text() != self._fingerprint():
+            raise ValueError(f"{self.parts} holds runs of another table (or of an older version of it); remove "
+                             "the folder to start the batch afresh")
+        done = {}
+        for part in sorted(self.parts.glob("*.h5")):
+            try:
+                groups = hdf5.list_runs(part)
+            except (OSError, ValueError):  # a part a kill cut short: its runs are computed again
+                continue
+            for group in groups:
+                if group.isdigit() and int(group) < len(self.rows):
+                    done[int(group)] = backends.Stored(part, group, backends.brief(hdf5.read(part, group)))
+        return done
 
     def _make_folder(self):
         if self.create_folder and self.tasks:
             self.path.parent.mkdir(exist_ok=True)
 
 
+_TABLE = "table.sha256"
+"""In the parts folder: the fingerprint of the table whose runs it holds."""
+
+
 def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compression=None, checksum=False,
-         defaults=None, create_folder=False):
+         defaults=None, create_folder=False, resume=False):
     """Check a batch before it runs → :class:`Plan`.
 
     ``table``: a CSV or TOML batch file (read with :func:`~pnrotor.batch.table.read_batch`; ``defaults``
@@ -130,7 +174,8 @@ def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compressi
     refused if it exists unless ``overwrite``; its folder must exist when the batch runs, or is created then
     (not its parents) with ``create_folder`` if there is a run to write.  ``jobs`` local worker processes
     (default: every core; 1 runs in this process) or a Dask ``scheduler`` address; ``compression`` and
-    ``checksum`` as in `pnrotor.hdf5.batch`."""
+    ``checksum`` as in `pnrotor.hdf5.batch`; ``resume`` completes an interrupted batch from the runs kept in
+    ``OUTPUT.parts`` (module docstring), which without it is an error."""
     if jobs is not None and scheduler is not None:
         raise ValueError("jobs applies to local runs; a Dask cluster (scheduler) sets its own parallelism")
     jobs = (os.cpu_count() or 1) if jobs is None else jobs
@@ -142,8 +187,12 @@ def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compressi
         raise IsADirectoryError(f"{path} is a folder; give a file name for the batch")
     if path.exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
-    return Plan(rows, path, jobs, scheduler, overwrite, dict(compression=compression, checksum=checksum),
-                create_folder)
+    result = Plan(rows, path, jobs, scheduler, overwrite, dict(compression=compression, checksum=checksum),
+                  create_folder, bool(resume))
+    if result.parts.exists() and not resume:
+        raise FileExistsError(f"{result.parts} holds the finished runs of an interrupted batch: pass --resume "
+                              "(resume=True) to complete it, or remove the folder")
+    return result
 
 
 def run(table, output, *, progress=False, **options):

@@ -49,8 +49,8 @@ def main(argv=None):
     except (UsageError, ValueError, FileNotFoundError, FileExistsError, IsADirectoryError) as error:
         print(f"pnrotor {args.command}: error: {error}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"pnrotor {args.command}: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as interrupt:
+        print(f"pnrotor {args.command}: interrupted" + (f"; {interrupt}" if str(interrupt) else ""), file=sys.stderr)
         return 130
     except OSError as error:  # a full disk, a lost permission...: what the system said, in one line
         print(f"pnrotor {args.command}: error: {error}", file=sys.stderr)

@@ -94,6 +94,8 @@ def add_parser(subparsers):
     batch.add_argument("--batch", metavar="FILE", help=f"CSV or TOML file of binaries; columns {', '.join(COLUMNS)}")
     batch.add_argument("--jobs", type=int, metavar="N",
                        help="local worker processes (default: os.cpu_count(); 1 runs in this process)")
+    batch.add_argument("--resume", action="store_true",
+                       help="complete an interrupted batch from the finished runs kept in OUTPUT.parts")
     batch.add_argument("--scheduler", metavar="ADDRESS",
                        help="run the batch on this Dask scheduler (e.g. tcp://host:8786); needs pnrotor[dask]")
     parser.set_defaults(func=run)
@@ -109,6 +111,8 @@ def _warn_if_cold():
 
 
 def run(args):
+    if args.resume and args.batch is None:
+        raise UsageError("--resume applies to --batch runs only")
     if args.batch is not None:
         if args.modes:
             raise UsageError("--modes applies to single runs only (not yet to --batch)")
@@ -246,7 +250,8 @@ def _run_batch(args):
     rows = batch.read_batch(args.batch, defaults)
     path, default_folder = _output_path(args, Path(args.batch).stem)
     plan = batch.plan(rows, path, jobs=args.jobs, scheduler=args.scheduler, overwrite=args.overwrite,
-                      compression=args.compression, checksum=args.checksum, create_folder=default_folder)
+                      compression=args.compression, checksum=args.checksum, create_folder=default_folder,
+                      resume=args.resume)
     if not args.quiet:
         bad = len(plan.rows) - len(plan.tasks)
         print(f"pnrotor evolve --batch {args.batch}: {len(plan.rows)} binaries"
