@@ -13,11 +13,11 @@ Batch: ``pnrotor evolve --batch params.csv`` (or ``.toml``) runs one binary per 
 strings in CSV, arrays in TOML; options given on the command line are the defaults of empty cells).
 The file's structure (columns, names) is checked before anything runs. Runs go to ``--jobs`` local
 worker processes (default: every core; ``--jobs 1`` runs in this process) or, with ``--scheduler
-ADDRESS``, to a Dask cluster (the ``pnrotor[dask]`` extra). This process alone writes the batch file,
-with `pnrotor.hdf5.batch`, each result as it arrives (one group per run, named by the ``name`` column or
-`default_name`), under a temporary name that is renamed to ``-o FILE`` (default
-``waveforms/BATCH-STEM.h5``) only when the batch is complete, so Ctrl-C never leaves a partial file: all
-of that is `pnrotor.batch`, which this module calls.
+ADDRESS``, to a Dask cluster (the ``pnrotor[dask]`` extra). This process alone writes the batch file
+(one group per run, named by the ``name`` column or `default_name`) at ``-o FILE`` (default
+``waveforms/BATCH-STEM.h5``) when the batch is complete; finished runs are kept in ``FILE.parts`` as
+they finish, so an interrupted batch is completed with ``--resume``: all of that is `pnrotor.batch`,
+which this module calls.
 A row that fails (bad value, evolve's ``ValueError``) is listed with its row number and message and
 the others are still written; exit status 1 then, 2 when the batch file itself is unusable.
 
