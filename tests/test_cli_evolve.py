@@ -553,3 +553,32 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     core.touch()
     cli_evolve._warn_if_cold()
     assert capsys.readouterr().err == ""
+
+
+SLOW_RUN = """
+import sys, time
+from pnrotor.batch import backends
+from pnrotor.cli import main
+def slow(params):
+    print("computing", flush=True)
+    time.sleep(120)
+backends.evolve_row = slow
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.parametrize("signame", ["SIGTERM", "SIGHUP"])
+def test_sigterm_and_sighup_stop_a_command_like_ctrl_c(signame, in_tmp):
+    """Signalled while a run computes: exit 130 with the interrupted line, no file, no traceback."""
+    import signal
+
+    process = subprocess.Popen([sys.executable, "-c", SLOW_RUN, "evolve", *FAST, "-o", "w.h5"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout.readline() == "computing\n"
+        process.send_signal(getattr(signal, signame))
+        _, err = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert process.returncode == 130 and err == "pnrotor evolve: interrupted\n", err
+    assert os.listdir(in_tmp) == []

@@ -6,12 +6,14 @@ an option several subcommands take is added by one helper here (`add_damping_opt
 Errors in the user's input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``,
 ``IsADirectoryError``, or a `UsageError` raised by a subcommand) are printed as one line on stderr with
 exit status 2 and no traceback; other failures of the system (``OSError``: a full disk, a permission) as
-one line with exit status 1; Ctrl-C (and SIGTERM or SIGHUP while a file is written) exits with 130.
+one line with exit status 1; Ctrl-C, SIGTERM and SIGHUP stop a command with exit status 130.
 """
 
 import argparse
 import importlib
+import signal
 import sys
+import threading
 
 SUBCOMMANDS = ("verify", "bench", "evolve", "inspect", "plot")
 
@@ -41,9 +43,18 @@ def build_parser():
     return parser
 
 
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
 def main(argv=None):
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = {}
+    if threading.current_thread() is threading.main_thread():  # SIGTERM and SIGHUP stop a command like Ctrl-C
+        for name in ("SIGTERM", "SIGHUP"):
+            if hasattr(signal, name):
+                previous[getattr(signal, name)] = signal.signal(getattr(signal, name), _interrupt)
     try:
         return int(args.func(args) or 0)
     except (UsageError, ValueError, FileNotFoundError, FileExistsError, IsADirectoryError) as error:
@@ -55,6 +66,9 @@ def main(argv=None):
     except OSError as error:  # a full disk, a lost permission...: what the system said, in one line
         print(f"pnrotor {args.command}: error: {error}", file=sys.stderr)
         return 1
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
 
 
 if __name__ == "__main__":

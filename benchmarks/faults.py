@@ -1,0 +1,149 @@
+"""Fault injection (issue 15): batches and single runs stopped by signals at random moments.
+
+* batches: ``pnrotor evolve --batch`` of ``--rows`` binaries, killed with SIGKILL, SIGTERM or SIGINT at a
+  random moment, then completed with ``--resume``: how many finished runs the kill kept (part files), whether
+  the resumed file equals an uninterrupted batch bitwise, and worker processes left alive afterwards;
+* single runs: ``pnrotor evolve`` of a BNS sampled at 1/4096 s (a ~200 MB file), signalled at a random
+  moment of its write: temporary files left behind, the target's state (absent, or complete and readable).
+
+    python benchmarks/faults.py [--trials 5] [--rows 40] [--jobs 2] [--seed 1]
+"""
+
+import argparse
+import os
+import random
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+SIGNALS = {"SIGKILL": signal.SIGKILL, "SIGTERM": signal.SIGTERM, "SIGINT": signal.SIGINT}
+
+
+def table(path, rows):
+    lines = ["m1,m2,chi1,chi2,f_ref,name"]
+    lines += [f'{20 + i % 17},{8 + i % 5},"0.5,0.1,0.3","0,0.4,-0.2",{40 + i},r{i}' for i in range(rows)]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def cli(*args, **kwargs):
+    return subprocess.Popen([sys.executable, "-m", "pnrotor", "evolve", *map(str, args)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, **kwargs)
+
+
+def alive(pid):
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(")")[-1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def children(pid):
+    """Processes whose parent is pid (workers, a fork server) — read before the kill."""
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    if int(f.read().split(")")[-1].split()[1]) == pid:
+                        out.append(int(entry))
+            except (FileNotFoundError, IndexError, ValueError):
+                pass
+    return out
+
+
+def same_file(a, b):
+    from pnrotor import hdf5
+
+    names = hdf5.list_runs(a)
+    if names != hdf5.list_runs(b):
+        return False
+    for name in names:
+        x, y = hdf5.read(a, name), hdf5.read(b, name)
+        if not all(np.array_equal(getattr(x, k), getattr(y, k)) for k in ("t", "v", "Phi", "chi1", "chi2", "R")):
+            return False
+    return True
+
+
+def batches(folder, args, rng):
+    csv = folder / "t.csv"
+    table(csv, args.rows)
+    reference = folder / "reference.h5"
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "pnrotor", "evolve", "--batch", csv, "-o", reference, "--jobs",
+                    str(args.jobs), "-q"], check=True, capture_output=True)
+    duration = time.perf_counter() - start
+    print(f"batch of {args.rows} rows, --jobs {args.jobs}: {duration:.2f} s uninterrupted")
+    print(f"{'signal':8s} {'trials':>6s} {'kept at kill (each)':>28s} {'resumed == uninterrupted':>25s} "
+          f"{'processes left':>15s}")
+    for name, signum in SIGNALS.items():
+        kept, equal, orphans = [], 0, 0
+        for trial in range(args.trials):
+            out = folder / f"{name}-{trial}.h5"
+            process = cli("--batch", csv, "-o", out, "--jobs", args.jobs, "-q")
+            time.sleep(rng.uniform(0.3, 0.9) * duration)
+            workers = children(process.pid)
+            workers += [w for pid in workers for w in children(pid)]
+            process.send_signal(signum)
+            process.wait(timeout=60)
+            time.sleep(2.0)
+            orphans += sum(alive(w) for w in workers)
+            parts = out.with_name(out.name + ".parts")
+            kept.append(len(list(parts.glob("*.h5"))) if parts.exists() else (args.rows if out.exists() else 0))
+            if not out.exists():
+                subprocess.run([sys.executable, "-m", "pnrotor", "evolve", "--batch", csv, "-o", out, "--jobs",
+                                str(args.jobs), "-q", "--resume"], check=True, capture_output=True)
+            equal += same_file(out, reference)
+        print(f"{name:8s} {args.trials:6d} {str(kept):>28s} {equal:>22d}/{args.trials} {orphans:15d}")
+
+
+def single_runs(folder, args, rng):
+    from pnrotor import hdf5
+
+    target = folder / "bns.h5"
+    command = ["--m1", "1.4", "--m2", "1.3", "--chi1", "0,0,0", "--chi2", "0,0,0", "--f-ref", "20", "--sampling",
+               "1/4096", "-o", target, "--overwrite", "-q"]
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "pnrotor", "evolve", *map(str, command)], check=True, capture_output=True)
+    duration = time.perf_counter() - start
+    size = target.stat().st_size / 1e6
+    print(f"\nsingle BNS run at 1/4096 s: {duration:.2f} s, file {size:.0f} MB")
+    print(f"{'signal':8s} {'trials':>6s} {'temporaries left':>17s} {'target unreadable':>18s} {'exit codes'}")
+    for name, signum in (("SIGTERM", signal.SIGTERM), ("SIGINT", signal.SIGINT), ("SIGHUP", signal.SIGHUP)):
+        left = unreadable = 0
+        codes = []
+        for _ in range(args.trials):
+            target.unlink(missing_ok=True)
+            process = cli(*command)
+            time.sleep(rng.uniform(0.5, 1.0) * duration)
+            process.send_signal(signum)
+            codes.append(process.wait(timeout=120))
+            left += len([p for p in folder.iterdir() if p.name.endswith(".pnrotor-tmp")])
+            if target.exists():
+                try:
+                    hdf5.read(target)
+                except ValueError:
+                    unreadable += 1
+        print(f"{name:8s} {args.trials:6d} {left:17d} {unreadable:18d} {codes}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--trials", type=int, default=5)
+    parser.add_argument("--rows", type=int, default=40)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+    rng = random.Random(args.seed)
+    with tempfile.TemporaryDirectory() as tmp:
+        batches(Path(tmp), args, rng)
+        single_runs(Path(tmp), args, rng)
+
+
+if __name__ == "__main__":
+    main()
