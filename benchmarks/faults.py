@@ -1,7 +1,7 @@
 """Fault injection (issue 15): batches and single runs stopped by signals at random moments.
 
 * batches: ``pnrotor evolve --batch`` of ``--rows`` binaries, killed with SIGKILL, SIGTERM or SIGINT at a
-  random moment, then completed with ``--resume``: how many finished runs the kill kept (part files), whether
+  random moment, then completed with ``--resume``: how many finished runs the kill kept (one part file each), whether
   the resumed file equals an uninterrupted batch bitwise, and worker processes left alive afterwards;
 * single runs: ``pnrotor evolve`` of a BNS sampled at 1/4096 s (a ~200 MB file), signalled at a random
   moment of its write: temporary files left behind, the target's state (absent, or complete and readable).
@@ -79,7 +79,7 @@ def batches(folder, args, rng):
                     str(args.jobs), "-q"], check=True, capture_output=True)
     duration = time.perf_counter() - start
     print(f"batch of {args.rows} rows, --jobs {args.jobs}: {duration:.2f} s uninterrupted")
-    print(f"{'signal':8s} {'trials':>6s} {'kept at kill (each)':>28s} {'resumed == uninterrupted':>25s} "
+    print(f"{'signal':8s} {'trials':>6s} {'runs kept at kill (each)':>28s} {'resumed == uninterrupted':>25s} "
           f"{'processes left':>15s}")
     for name, signum in SIGNALS.items():
         kept, equal, orphans = [], 0, 0
@@ -94,7 +94,7 @@ def batches(folder, args, rng):
             time.sleep(2.0)
             orphans += sum(alive(w) for w in workers)
             parts = out.with_name(out.name + ".parts")
-            kept.append(len(list(parts.glob("*.h5"))) if parts.exists() else (args.rows if out.exists() else 0))
+            kept.append(len(list(parts.glob("run-*.h5"))) if parts.exists() else (args.rows if out.exists() else 0))
             if not out.exists():
                 subprocess.run([sys.executable, "-m", "pnrotor", "evolve", "--batch", csv, "-o", out, "--jobs",
                                 str(args.jobs), "-q", "--resume"], check=True, capture_output=True)

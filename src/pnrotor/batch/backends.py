@@ -2,8 +2,8 @@
 
 * :func:`results_serial` — in this process, in order;
 * :func:`results_pool` — local worker processes (``fork`` where safe, :func:`start_method`), a few rows per
-  task (:func:`chunk_size`); with ``parts`` the workers write their runs into HDF5 part files
-  (:func:`write_chunk`) and send back only a :class:`Stored` and the run's :func:`brief`;
+  task (:func:`chunk_size`); with ``parts`` the workers write each run into its own HDF5 part file
+  (:func:`write_chunk`, :func:`store`) and send back only a :class:`Stored` and the run's :func:`brief`;
 * :func:`results_dask` — a Dask cluster (the ``pnrotor[dask]`` extra), one task per row.
 
 ``result`` is the `Evolution`, a :class:`Stored`, or the message of the row's failure: one failing row
@@ -52,7 +52,9 @@ def brief(run):
 
 
 def store(run, folder, index, storage):
-    """Write one finished run into its own part file ``run-INDEX.h5`` (group INDEX) in `folder` → `Stored`."""
+    """Write one finished run into its own part file ``run-INDEX.h5`` (group INDEX) in `folder` → `Stored`;
+    atomic but not fsynced: it survives the process (kill -9 included), not a power loss (fsyncs made 200
+    runs at 1/4096 s with --jobs 2 take ~20% longer)."""
     from pnrotor import hdf5
 
     path = Path(folder) / f"run-{index}.h5"
@@ -62,23 +64,15 @@ def store(run, folder, index, storage):
 
 
 def write_chunk(chunk, folder, storage):
-    """`attempt` on each (index, params) of a chunk, the runs written into a part file in `folder` (group =
-    index, `pnrotor.hdf5.batch` with the options `storage`) → [(index, ok, Stored or message)]. Encoding
-    HDF5 costs several times a typical run, so the workers do it and the parent only copies the groups into
-    the batch file (`Batch.copy_from`, HDF5's object copy, which keeps their layout and filters)."""
-    from pnrotor import hdf5
-
-    path = Path(folder) / f"part-{chunk[0][0]}.h5"
+    """`attempt` on each (index, params) of a chunk, each finished run written at once into its own part file
+    in `folder` (:func:`store`, so a killed worker loses only the run it was computing) → [(index, ok, Stored
+    or message)]. Encoding HDF5 costs several times a typical run, so the workers do it and the parent only
+    copies the groups into the batch file (`Batch.copy_from`, HDF5's object copy, which keeps their layout
+    and filters)."""
     results = []
-    # written atomically but not fsynced: it survives the process (kill -9 included), not a power loss
-    # (fsyncs made 200 runs at 1/4096 s with --jobs 2 take ~20% longer)
-    with hdf5.batch(path, durable=False, **storage) as part:
-        for index, params in chunk:
-            ok, result = attempt(params)
-            if ok:
-                part.add(str(index), result)
-                result = Stored(path, str(index), brief(result))
-            results.append((index, ok, result))
+    for index, params in chunk:
+        ok, result = attempt(params)
+        results.append((index, ok, store(result, folder, index, storage) if ok else result))
     return results
 
 
@@ -141,8 +135,8 @@ def results_pool(tasks, jobs, context=None, chunksize=None, parts=None, storage=
 
     The workers (started by `multiprocessing` method `context`, default `start_method`) load the PN code once
     and take `chunksize` rows per task. They send back each run, or with `parts` (a folder) write the runs
-    of each chunk to a part file there (with the `pnrotor.hdf5.batch` options `storage`, a dict) and send
-    back a `Stored`, the part file staying for the caller. Closing the generator early (Ctrl-C) cancels the
+    to part files there (with the `pnrotor.hdf5.batch` options `storage`, a dict) and send back a `Stored`
+    each, the part files staying for the caller. Closing the generator early (Ctrl-C) cancels the
     queued tasks and stops the workers.
     The workers are started here, before the caller starts any thread (a progress bar's)."""
     import multiprocessing
