@@ -94,7 +94,7 @@ class Plan:
         if self.scheduler is None:
             results = (backends.results_serial(tasks) if self.jobs == 1 or len(tasks) <= 1 else
                        backends.results_pool(tasks, self.jobs, parts=self.parts, storage=self.storage))
-        briefs, evolve_seconds = {}, 0.0
+        evolve_seconds = 0.0
         interrupted = _InterruptFlag()
         try:
             with interrupted.deferred(), _progress_bar(len(tasks), enabled=progress) as bar:
