@@ -25,9 +25,12 @@ every write and read of it:
   to the temporary name once; ``write(..., group=NAME)`` adds one run that way, so each such call costs a
   copy of the file. One writer per file at a time.
 
-Reading checks that the file exists, is HDF5, is not truncated, is a pnrotor file and has a schema
-version this pnrotor knows, and says which of these failed (`FileNotFoundError`, `IsADirectoryError`
-or `ValueError`).
+Files are written in HDF5's 1.10 format (``libver=("v110", "v110")``: readable by HDF5 1.10 and later),
+whose object headers carry checksums, so damaged metadata or attributes are an error on reading; damaged
+data are one only with ``checksum=True`` (Fletcher-32 per chunk).  Reading checks that the file exists,
+is HDF5, is not truncated, is a pnrotor file and has a schema version this pnrotor knows, and says which
+of these failed (`FileNotFoundError`, `IsADirectoryError` or `ValueError`); whatever else damage makes
+HDF5 raise while reading becomes a `ValueError` naming the file, never a traceback.
 """
 
 import dataclasses
@@ -331,7 +334,7 @@ def _replacing(path, overwrite, copy=False, durable=True):
         with _Interrupts() as interrupts:
             if copy:
                 shutil.copyfile(path, temporary)
-            with h5py.File(temporary, "r+" if copy else "w") as f:
+            with h5py.File(temporary, "r+" if copy else "w", libver=("v110", "v110")) as f:
                 if writeback:
                     _WRITEBACKS[f.filename] = writeback
                 try:
@@ -589,13 +592,16 @@ def _open(path):
     except OSError as error:
         raise ValueError(f"{path} is truncated or corrupt: HDF5 cannot open it ({error})") from None
     with f:
-        _check_schema(f, path)
         try:
+            _check_schema(f, path)
             yield f
         except OSError as error:
             if type(error) is not OSError:  # FileExistsError and kin come from the caller, not from HDF5
                 raise
             raise ValueError(f"{path} is corrupt: HDF5 cannot read it ({error})") from None
+        except (RuntimeError, TypeError, KeyError, IndexError, AttributeError, UnicodeDecodeError) as error:
+            # what damaged metadata makes h5py or the rebuilding of the dataclass raise: one clear error
+            raise ValueError(f"{path} is corrupt: {type(error).__name__} while reading it ({error})") from None
 
 
 def _check_schema(g, path):
