@@ -32,10 +32,9 @@ from pnrotor.waveform.layout import ell_m as _ell_m
 from pnrotor.waveform.layout import mode_index
 from pnrotor.waveform.wigner import rotate_about_z, rotate_modes, wigner_D
 
-__all__ = ["Modes", "modes", "check_arguments", "FRAMES", "AMPLITUDE_ORDERS"]
+__all__ = ["Modes", "modes", "check_arguments", "FRAMES"]
 
 FRAMES = ("inertial", "coprecessing", "coorbital")
-AMPLITUDE_ORDERS = tuple(k / 2 for k in range(8))
 ELL_MAX = 8
 
 
