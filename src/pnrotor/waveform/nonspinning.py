@@ -36,10 +36,7 @@ Left out, on purpose:
 
 import math
 
-__all__ = ["terms", "MAX_K"]
-
-MAX_K = 7
-"""Highest power of v beyond h₀ (3.5PN)."""
+__all__ = ["terms"]
 
 _GAMMA_E = 0.5772156649015329
 _LN2 = math.log(2.0)
