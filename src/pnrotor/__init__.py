@@ -7,6 +7,8 @@ _EXPORTS = {
     "FrameHistory": "pnrotor.history",
     "evolve": "pnrotor.pn.evolve",
     "Evolution": "pnrotor.pn.evolve",
+    "evolve_many": "pnrotor.pn.many",
+    "Population": "pnrotor.pn.many",
     "modes": "pnrotor.waveform.modes",
     "Modes": "pnrotor.waveform.modes",
 }

@@ -6,9 +6,11 @@ quantities, each coefficient beside its source), :mod:`~pnrotor.pn.system` (stat
 vector, numba right-hand sides and events), :mod:`~pnrotor.pn.initial` (units, frequencies, frames),
 and one run's stages: :mod:`~pnrotor.pn.settings` (inputs checked → ``Settings``),
 :mod:`~pnrotor.pn.evolve` (the specialized system, the two integrations, and ``evolve`` →
-:class:`Evolution`) and :mod:`~pnrotor.pn.sampling` (the output history from the dense output).
+:class:`Evolution`) and :mod:`~pnrotor.pn.sampling` (the output history from the dense output); :mod:`~pnrotor.pn.many`
+(``evolve_many``: a population of binaries to one end state each, in one parallel compiled loop).
 """
 
 from .evolve import Evolution, evolve, lalsuite_orders
+from .many import Population, evolve_many
 
-__all__ = ["Evolution", "evolve", "lalsuite_orders"]
+__all__ = ["Evolution", "evolve", "lalsuite_orders", "Population", "evolve_many"]

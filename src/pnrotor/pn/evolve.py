@@ -213,28 +213,32 @@ _BACKWARD_EVENTS = np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0])
 backward; the denominator of v̇ and event 6 falling; the others on any crossing."""
 
 
-def integrate_half(s, system, forward, t_eval, dense):
-    """DOP853 from f_ref forward (to f_max, or to the end of the inspiral within 4τ_N(v₀) + 10⁴ M) or
-    backward (to f_min, within twice the Newtonian time from f_min to f_ref + 10⁴ M) → (OdeResult,
-    termination name)."""
+def half(s, system, forward):
+    """(p, t_end, event directions, name of the end-frequency termination) of the forward half (to f_max,
+    or to the end of the inspiral within 4τ_N(v₀) + 10⁴ M) or the backward half (to f_min, within twice
+    the Newtonian time from f_min to f_ref + 10⁴ M)."""
     tau0 = _ini.newtonian_time_to_coalescence(s.v0, s.nu)
     if forward:
-        p, t_end, directions = system.p, 4.0 * tau0 + 1.0e4, _FORWARD_EVENTS
-        end = "f_max" if s.f_max is not None else "v_max"
-    else:
-        p = system.p.copy()
-        p[_sys.P_VEND] = s.v_min
-        t_end = -(2.0 * (_ini.newtonian_time_to_coalescence(s.v_min, s.nu) - tau0) + 1.0e4)
-        directions, end = _BACKWARD_EVENTS, "f_min"
+        return system.p, 4.0 * tau0 + 1.0e4, _FORWARD_EVENTS, "f_max" if s.f_max is not None else "v_max"
+    p = system.p.copy()
+    p[_sys.P_VEND] = s.v_min
+    t_end = -(2.0 * (_ini.newtonian_time_to_coalescence(s.v_min, s.nu) - tau0) + 1.0e4)
+    return p, t_end, _BACKWARD_EVENTS, "f_min"
+
+
+def integrate_half(s, system, forward, t_eval, dense):
+    """DOP853 from f_ref over the forward or backward :func:`half` → (OdeResult, termination name)."""
+    p, t_end, directions, end = half(s, system, forward)
     res = dop853(system.rhs, 0.0, system.y0, t_end, s.atol, rtol=s.rtol, args=p, max_steps=s.max_steps,
                  t_eval=t_eval, dense=dense, events=system.events, n_events=_sys.N_EVENTS, **CONTROLLER,
                  event_direction=directions)
-    return res, _status_to_termination(res, end, s.approximant)
+    return res, termination(res.status, res.event_index, end, s.approximant)
 
 
-def _status_to_termination(res, end, approximant):
-    if res.status == STATUS_EVENT:
-        idx = res.event_index
+def termination(status, idx, end, approximant):
+    """The termination name (module docstring) of an integration's status and event index ``idx``; ``end``
+    names the end-frequency event."""
+    if status == STATUS_EVENT:
         if idx == _sys.EV_V_END:
             return end
         if idx == _sys.EV_POLE:
@@ -242,7 +246,7 @@ def _status_to_termination(res, end, approximant):
         return {_sys.EV_ENERGY: "energy_balance", _sys.EV_VDOT: "vdot_nonpositive",
                 _sys.EV_SPIN1: "spin_magnitude", _sys.EV_SPIN2: "spin_magnitude", _sys.EV_VDOT_PEAK: "vdot_peak"}[idx]
     return {STATUS_SUCCESS: "time_limit", STATUS_MAX_STEPS: "max_steps",
-            STATUS_STEP_UNDERFLOW: "step_underflow", STATUS_NONFINITE: "nonfinite"}[res.status]
+            STATUS_STEP_UNDERFLOW: "step_underflow", STATUS_NONFINITE: "nonfinite"}[status]
 
 
 # ---------------------------------------------------------------------------------------------------

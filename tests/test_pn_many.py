@@ -1,0 +1,112 @@
+"""pnrotor.pn.evolve_many against single evolve calls: bitwise the same end states, binary by binary."""
+
+import numba
+import numpy as np
+import pytest
+
+from pnrotor.pn import evolve, evolve_many
+
+FIELDS = ("v", "Phi", "chi1", "chi2", "R", "ell_hat")
+
+
+def _table(n, seed):
+    """n binaries: nonspinning, aligned and precessing, mass ratios 1–8, some ℓ̂ tilted."""
+    rng = np.random.default_rng(seed)
+    m1 = rng.uniform(5.0, 40.0, n)
+    m2 = m1 / rng.uniform(1.0, 8.0, n)
+    c1 = rng.uniform(-0.6, 0.6, (n, 3))
+    c2 = rng.uniform(-0.6, 0.6, (n, 3))
+    c1[0::4] = c2[0::4] = 0.0                       # nonspinning
+    c1[1::4, :2] = c2[1::4, :2] = 0.0               # aligned with ℓ̂ = ẑ
+    ell = np.tile([0.0, 0.0, 1.0], (n, 1))
+    ell[3::4] = [0.6, 0.0, 0.8]
+    nh = np.tile([1.0, 0.0, 0.0], (n, 1))
+    nh[3::4] = [0.8, 0.0, -0.6]
+    return m1, m2, c1, c2, ell, nh
+
+
+def _single_end(i, m1, m2, c1, c2, ell, nh, f_ref, f_end, options):
+    """(t, state, termination, nfev of that half) of binary i from evolve, at the end evolve_many integrates to."""
+    if f_end is not None and f_end < f_ref:
+        e = evolve(m1[i], m2[i], c1[i], c2[i], f_ref, f_min=f_end, ell_hat=ell[i], n_hat=nh[i], sampling="steps",
+                   **options)
+        return e.t[0], [getattr(e, k)[0] for k in FIELDS], e.stats["termination_backward"], e.stats["nfev_backward"]
+    e = evolve(m1[i], m2[i], c1[i], c2[i], f_ref, f_max=f_end, ell_hat=ell[i], n_hat=nh[i], sampling="final",
+               **options)
+    return e.t[-1], [getattr(e, k)[-1] for k in FIELDS], e.termination, e.stats["nfev"]
+
+
+def _assert_same_as_single(pop, table, f_ref, f_end, options):
+    m1, m2, c1, c2, ell, nh = table
+    for i in range(m1.size):
+        fe = None if f_end is None else float(np.broadcast_to(f_end, m1.shape)[i])
+        t, state, term, nfev = _single_end(i, m1, m2, c1, c2, ell, nh, f_ref, fe, options)
+        assert pop.t[i] == t and pop.termination[i] == term and pop.nfev[i] == nfev, i
+        for k, x in zip(FIELDS, state):
+            np.testing.assert_array_equal(getattr(pop, k)[i], x, err_msg=f"binary {i}, {k}")
+
+
+@pytest.mark.parametrize("options", [
+    {},
+    {"approximant": "T1", "rotor": "orbital", "atol": 1e-9},
+    {"approximant": "T5", "precession": "instantaneous", "pn_order": 3.0},
+    {"integrate_rotor": True, "kappa1": 3.0, "kappa2": 5.0},
+])
+def test_end_of_inspiral_equals_single_evolve(options):
+    table = _table(12, 1)
+    pop = evolve_many(*table[:4], 20.0, ell_hat=table[4], n_hat=table[5], **options)
+    assert set(pop.termination) <= {"energy_balance", "vdot_peak", "vdot_divergent", "v_max"}
+    _assert_same_as_single(pop, table, 20.0, None, options)
+
+
+def test_forward_and_backward_targets_equal_single_evolve():
+    """f_end per binary: above f_ref forward (f_max), below backward (f_min); the spins at the target."""
+    table = _table(12, 2)
+    f_end = np.where(np.arange(12) % 2 == 0, 12.0, 35.0)
+    pop = evolve_many(*table[:4], 20.0, f_end=f_end, ell_hat=table[4], n_hat=table[5])
+    assert list(pop.termination) == ["f_min" if f < 20 else "f_max" for f in f_end]
+    _assert_same_as_single(pop, table, 20.0, f_end, {})
+    np.testing.assert_allclose(pop.v ** 3 / (np.pi * (table[0] + table[1]) * 4.925490947641267e-06), f_end,
+                               rtol=1e-9)
+    assert np.all((pop.t < 0) == (f_end < 20.0))
+
+
+def test_invalid_binaries_are_reported_not_raised():
+    table = list(_table(6, 3))
+    table[2][1] = [0.9, 0.9, 0.0]         # |χ₁| > 1
+    m1 = table[0].copy()
+    m1[4] = -3.0                           # negative mass
+    pop = evolve_many(m1, *table[1:4], [20.0, 20.0, 20.0, 20.0, 20.0, 5000.0], ell_hat=table[4], n_hat=table[5])
+    assert list(pop.termination[[1, 4, 5]]) == ["invalid"] * 3
+    assert "chi1" in pop.message[1] and "m1" in pop.message[4] and "f_ref" in pop.message[5]
+    assert np.all(np.isnan(pop.R[[1, 4, 5]])) and np.all(pop.nfev[[1, 4, 5]] == 0)
+    good = [0, 2, 3]
+    assert not np.any(np.isnan(pop.R[good])) and "invalid" not in set(pop.termination[good])
+    single = evolve(m1[2], table[1][2], table[2][2], table[3][2], 20.0, ell_hat=table[4][2], n_hat=table[5][2],
+                    sampling="final")
+    np.testing.assert_array_equal(pop.R[2], single.R[-1])
+
+
+def test_results_do_not_depend_on_the_number_of_threads():
+    table = _table(9, 4)
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = evolve_many(*table[:4], 20.0, ell_hat=table[4], n_hat=table[5])
+    finally:
+        numba.set_num_threads(before)
+    many = evolve_many(*table[:4], 20.0, ell_hat=table[4], n_hat=table[5])
+    for k in FIELDS + ("t", "nfev"):
+        np.testing.assert_array_equal(getattr(one, k), getattr(many, k))
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: evolve_many([], [], np.zeros((0, 3)), np.zeros((0, 3)), 20.0), "m1, m2 and f_ref"),
+    (lambda: evolve_many([30, 20], [10, 10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1, m2 and f_ref"),
+    (lambda: evolve_many([30, 20], [10, 10], np.zeros((3, 3)), [0, 0, 0], 20.0), "chi1 must have shape"),
+    (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, atol=-1.0), "atol"),
+    (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, approximant="T3"), "approximant"),
+])
+def test_bad_shapes_and_shared_options_raise(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
