@@ -25,7 +25,6 @@ The driver loops take these functions as first-class function values with explic
 they are compiled once per machine (numba cache) and reused for every right-hand side.
 """
 
-from .bulirsch_stoer import bulirsch_stoer
 from .dop853 import (AFTER_STEP_SIG, EVENTS_SIG, RHS_SIG, by_address, dop853, no_after_step, no_events,
                      select_initial_step)
 from .result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
@@ -37,3 +36,13 @@ __all__ = [
     "no_after_step", "no_events", "select_initial_step",
     "STATUS_SUCCESS", "STATUS_EVENT", "STATUS_MAX_STEPS", "STATUS_STEP_UNDERFLOW", "STATUS_NONFINITE",
 ]
+
+
+def __getattr__(name):
+    # Bulirsch–Stoer on first use: importing its module compiles its core (~3 s on a cold cache, measured),
+    # which a PN run does not need
+    if name == "bulirsch_stoer":
+        from .bulirsch_stoer import bulirsch_stoer
+        globals()["bulirsch_stoer"] = bulirsch_stoer   # the function, not the submodule the import just set
+        return bulirsch_stoer
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
