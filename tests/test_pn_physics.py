@@ -21,6 +21,25 @@ def _angle(a, b):
 # invariants
 # --------------------------------------------------------------------------------------------------
 
+def test_solar_mass_in_seconds_is_astropy_s_and_lalsuite_s():
+    """MTSUN_SI, written out in pnrotor.pn.initial, is astropy's GM☉/c³ exactly and LALSuite's to 1 ulp."""
+    from astropy import constants as const
+    lal = pytest.importorskip("lal")
+    assert MTSUN_SI == float((const.GM_sun / const.c ** 3).si.value)
+    assert abs(MTSUN_SI - lal.MTSUN_SI) <= np.spacing(MTSUN_SI)
+
+
+def test_quantities_are_converted_like_floats_in_solar_masses_and_hertz():
+    """Masses and frequencies as astropy Quantities give the same run as floats in M☉ and Hz."""
+    import astropy.units as u
+    a = evolve(30.0, 10.0, [0.1, 0.2, 0.3], [0.0, 0.0, 0.0], 20.0, sampling="final")
+    b = evolve(30.0 * u.M_sun, (10.0 * u.M_sun).to(u.kg), [0.1, 0.2, 0.3], [0.0, 0.0, 0.0], 0.02 * u.kHz,
+               sampling="final")
+    np.testing.assert_allclose(b.R, a.R, rtol=0, atol=1e-9)
+    assert b.inputs["m1_Msun"] == 30.0 and b.inputs["f_ref_Hz"] == 20.0
+    assert b.inputs["m2_Msun"] == pytest.approx(10.0, rel=1e-14)
+
+
 @pytest.mark.parametrize("chi1,chi2", [([0, 0, 0], [0, 0, 0]), ([0, 0, 0.9], [0, 0, -0.5])])
 def test_aligned_runs_keep_ell_fixed(chi1, chi2):
     """Through the *precessing* state (integrate_rotor=True) ℓ̂ stays ẑ to 1e-12 (measured 4.4e-16)
