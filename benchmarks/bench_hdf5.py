@@ -12,8 +12,9 @@ of --samples samples each, computed by pnrotor:
   136 MB at 10⁶).
 
 Compute time is that call, warm (numba's code loaded and a first call made). Each run is written without
-compression, with gzip and with lzf, each without checksums (the default) and with ``checksum=True``
-(the write time includes fsync and the atomic rename) and read back with `pnrotor.hdf5.read`. Every time
+compression, with gzip and with lzf, each with ``checksum=False`` and with checksums (the default; the
+write time includes the layout check, fsync and the atomic rename) and read back with `pnrotor.hdf5.read`
+(which checks the layout). Every time
 is the best of --repeat; the table gives the ratios write/compute and read/compute (below 1: the
 acceptance holds). The files go to a temporary folder under --dir (default: waveforms/, the real output
 folder, so the disk is the one real runs write to).
@@ -23,7 +24,15 @@ A second table breaks an uncompressed write of each run down: plain h5py writing
 with and without an fsync at the end) and `pnrotor.hdf5.write` with and without checksums. The variants
 are interleaved in random order, --repeat rounds, best and median kept (the machine may be shared).
 
+A third table, typical runs: `pnrotor.evolve` of a precessing 30 + 10 M☉ binary (χ₁ = (0.5, 0.1, 0.3),
+χ₂ = (0, 0.4, −0.2)) from f_ref = 20 Hz, sampled at 1/4096 s and at its integrator's steps (the CLI's
+default), each written uncompressed with and without checksums, durably (`write`, fsyncs) and not
+(``batch(durable=False)``, scratch files), interleaved, max(--repeat, 15) rounds: best and median times and
+the ratio with/without checksums, against the compute time; and the layout check alone
+(`pnrotor.hdf5.layout_problems`, part of every write and read) on each run and on the 10⁶-sample Evolution.
+
     python benchmarks/bench_hdf5.py [--samples 1000000] [--repeat 3] [--dir waveforms] [--no-breakdown]
+                                    [--typical-only]
 """
 
 import argparse
@@ -42,6 +51,7 @@ from pnrotor import hdf5
 from pnrotor.analytic import PrecessingNutatingBinary
 
 BNS = dict(m1=1.4, m2=1.4, chi1=(0.1, 0.0, 0.05), chi2=(0.0, -0.1, 0.05), f_ref=20.0)
+TYPICAL = dict(m1=30.0, m2=10.0, chi1=(0.5, 0.1, 0.3), chi2=(0.0, 0.4, -0.2), f_ref=20.0)
 
 
 def frame_history(samples):
@@ -121,6 +131,48 @@ def breakdown(name, run, folder, repeat):
         print(f"{variant:<44} {min(measured):7.3f} {statistics.median(measured):8.3f}")
 
 
+def layout_check_time(run, repeat=20):
+    """Best time of `pnrotor.hdf5.layout_problems` on `run` (what write and read add to check it)."""
+    values = {name: getattr(run, name) for name in vars(run) if name not in hdf5.NOT_WRITTEN}
+    return best_time(lambda: hdf5.layout_problems(type(run), values), repeat)[0]
+
+
+def typical(folder, repeat):
+    """Print the write cost of checksums on typical runs (interleaved rounds, best and median), with the fsyncs
+    of a durable write (`write`) and without them (``batch(..., durable=False)``, as for scratch files)."""
+    print(f"\ntypical runs: precessing 30 + 10 Msun from 20 Hz, uncompressed writes, {repeat} interleaved rounds")
+    print(f"{'sampling':<10} {'samples':>8} {'MB':>6} {'compute s':>9} {'check s':>8} {'fsync':<5} "
+          f"{'no checksum s (best/median)':>28} {'checksum s (best/median)':>25} {'ratio best/median':>18}")
+
+    def write(path, run, checksum, durable):
+        if durable:
+            hdf5.write(path, run, checksum=checksum, overwrite=True)
+        else:
+            with hdf5.batch(path, checksum=checksum, overwrite=True, durable=False) as runs:
+                runs.add("run", run)
+
+    for label, sampling in (("1/4096 s", 1 / 4096), ("steps", "steps")):
+        compute = lambda: pnrotor.evolve(**TYPICAL, sampling=sampling)  # noqa: E731
+        compute()
+        computing, run = best_time(compute, repeat)
+        variants = [(checksum, durable) for checksum in (False, True) for durable in (True, False)]
+        times = {variant: [] for variant in variants}
+        for _ in range(repeat):
+            for checksum, durable in random.sample(variants, len(variants)):
+                path = Path(folder) / f"typical-{checksum}-{durable}.h5"
+                start = time.perf_counter()
+                write(path, run, checksum, durable)
+                times[checksum, durable].append(time.perf_counter() - start)
+        mb = sum(value.nbytes for value in vars(run).values() if isinstance(value, np.ndarray)) / 1e6
+        for durable in (True, False):
+            best = {c: min(times[c, durable]) for c in (False, True)}
+            median = {c: statistics.median(times[c, durable]) for c in (False, True)}
+            print(f"{label:<10} {run.t.size:>8} {mb:6.2f} {computing:9.4f} {layout_check_time(run):8.5f} "
+                  f"{'yes' if durable else 'no':<5} {best[False]:13.4f} / {median[False]:<12.4f} "
+                  f"{best[True]:11.4f} / {median[True]:<11.4f} "
+                  f"{best[True] / best[False]:8.2f} / {median[True] / median[False]:<.2f}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=int, default=10**6, help="samples per run (default: 10⁶)")
@@ -128,6 +180,7 @@ def main():
     parser.add_argument("--dir", default=str(Path(__file__).resolve().parents[1] / "waveforms"),
                         help="folder for the temporary files (default: waveforms/)")
     parser.add_argument("--no-breakdown", action="store_true", help="skip the table of write variants")
+    parser.add_argument("--typical-only", action="store_true", help="only the table of typical runs")
     args = parser.parse_args()
     if args.samples < 2 or args.repeat < 1:
         parser.error("--samples must be ≥ 2 and --repeat ≥ 1")
@@ -136,15 +189,19 @@ def main():
     header = (f"{'run':<13} {'samples':>8} {'compute s':>9} {'compression':<11} {'checksum':<8} {'data MB':>8} "
               f"{'file MB':>8} "
               f"{'write s':>8} {'read s':>8} {'write/compute':>13} {'read/compute':>12}")
-    print(header)
     runs = {}
     with tempfile.TemporaryDirectory(dir=args.dir, prefix="bench_hdf5.") as folder:
+        typical(folder, max(args.repeat, 15))
+        if args.typical_only:
+            return
+        print(f"\n{header}")
         for name, make in (("FrameHistory", frame_history), ("Evolution", evolution)):
             compute = make(args.samples)
             compute()  # warm: numba's code loaded, first-call dispatch done
             computing, run = best_time(compute, args.repeat)
             data = sum(value.nbytes for value in vars(run).values() if isinstance(value, np.ndarray)) / 1e6
             runs[name] = run
+            print(f"{name}: layout check {layout_check_time(run, 5):.4f} s")
             for checksum in (False, True):
                 for compression in hdf5.COMPRESSIONS:
                     path = Path(folder) / f"{name}-{compression}-{checksum}.h5"

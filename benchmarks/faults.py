@@ -4,9 +4,15 @@
   random moment, then completed with ``--resume``: how many finished runs the kill kept (one part file each), whether
   the resumed file equals an uninterrupted batch bitwise, and worker processes left alive afterwards;
 * single runs: ``pnrotor evolve`` of a BNS sampled at 1/4096 s (a ~200 MB file), signalled at a random
-  moment of its write: temporary files left behind, the target's state (absent, or complete and readable).
+  moment of its write: temporary files left behind, the target's state (absent, or complete and readable);
+* byte flips: ``--flips`` single-bit flips at random places of files of a precessing 30 + 10 M☉ run
+  (sampled at its steps and at 1/4096 s) written by `pnrotor.hdf5.write` with its default checksums and with
+  ``checksum=False``, each read back with `pnrotor.hdf5.read`: caught (a ValueError naming the file), read
+  back identical (the flip hit unused bytes), silently wrong (read without error, a value changed) or a
+  traceback (any other exception).
 
-    python benchmarks/faults.py [--trials 5] [--rows 40] [--jobs 2] [--seed 1]
+    python benchmarks/faults.py [--trials 5] [--rows 40] [--jobs 2] [--seed 1] [--flips 500]
+                                [--sections batches,single,flips]
 """
 
 import argparse
@@ -132,17 +138,70 @@ def single_runs(folder, args, rng):
         print(f"{name:8s} {args.trials:6d} {left:17d} {unreadable:18d} {codes}")
 
 
+def same_run(a, b):
+    """Whether two runs hold the same values bitwise (arrays by their bytes; NaN equals NaN)."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.dtype == b.dtype
+                and a.shape == b.shape and a.tobytes() == b.tobytes())
+    if isinstance(a, dict) or isinstance(b, dict):
+        return isinstance(a, dict) and isinstance(b, dict) and a.keys() == b.keys() and all(
+            same_run(a[k], b[k]) for k in a)
+    if hasattr(a, "__dataclass_fields__"):
+        return type(a) is type(b) and all(same_run(getattr(a, k), getattr(b, k)) for k in vars(a))
+    if isinstance(a, float) and isinstance(b, float):
+        return np.float64(a).tobytes() == np.float64(b).tobytes()
+    return type(a) is type(b) and a == b
+
+
+def flips(folder, args, rng):
+    import pnrotor
+    from pnrotor import hdf5
+
+    binary = dict(m1=30.0, m2=10.0, chi1=(0.5, 0.1, 0.3), chi2=(0.0, 0.4, -0.2), f_ref=20.0)
+    print(f"\nbyte flips: {args.flips} single-bit flips per file, precessing 30 + 10 Msun from 20 Hz")
+    print(f"{'sampling':<9} {'checksums':<9} {'file kB':>8} {'caught':>7} {'identical':>9} {'silently wrong':>14} "
+          f"{'tracebacks':>10}")
+    for label, sampling in (("steps", "steps"), ("1/4096 s", 1 / 4096)):
+        run = pnrotor.evolve(**binary, sampling=sampling)
+        for checksum in (True, False):
+            base = folder / f"flips-{checksum}.h5"
+            hdf5.write(base, run, checksum=checksum, overwrite=True)
+            data = base.read_bytes()
+            counts = dict(caught=0, identical=0, wrong=0, traceback=0)
+            damaged = folder / "damaged.h5"
+            for _ in range(args.flips):
+                flipped = bytearray(data)
+                flipped[rng.randrange(len(flipped))] ^= 1 << rng.randrange(8)
+                damaged.write_bytes(bytes(flipped))
+                try:
+                    back = hdf5.read(damaged)
+                except ValueError as error:
+                    counts["caught" if str(damaged) in str(error) else "traceback"] += 1
+                except Exception:  # noqa: BLE001 (what is counted)
+                    counts["traceback"] += 1
+                else:
+                    counts["identical" if same_run(back, run) else "wrong"] += 1
+            print(f"{label:<9} {'default' if checksum else 'no':<9} {len(data) / 1e3:8.1f} {counts['caught']:7d} "
+                  f"{counts['identical']:9d} {counts['wrong']:14d} {counts['traceback']:10d}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--trials", type=int, default=5)
     parser.add_argument("--rows", type=int, default=40)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--flips", type=int, default=500, help="bit flips per file in the flips section")
+    parser.add_argument("--sections", default="batches,single,flips", help="comma-separated sections to run")
     args = parser.parse_args()
     rng = random.Random(args.seed)
+    sections = {"batches": batches, "single": single_runs, "flips": flips}
+    chosen = args.sections.split(",")
+    if not set(chosen) <= sections.keys():
+        parser.error(f"--sections takes a comma-separated list of {', '.join(sections)}")
     with tempfile.TemporaryDirectory() as tmp:
-        batches(Path(tmp), args, rng)
-        single_runs(Path(tmp), args, rng)
+        for name in chosen:
+            sections[name](Path(tmp), args, rng)
 
 
 if __name__ == "__main__":

@@ -104,12 +104,15 @@ def test_output_option_and_compression(tmp_path, capsys):
     with h5py.File(path) as f:
         assert f["R"].compression == "lzf" and f["v"].compression == "lzf"
     assert_same_run(hdf5.read(path), pnrotor.evolve(**FAST_KW))
-    assert evolve(capsys, *FAST, "-o", path, "--overwrite", "--compression", "gzip")[0] == 0
+    assert evolve(capsys, *FAST, "-o", path, "--overwrite", "--compression", "gzip", "--no-checksum")[0] == 0
     with h5py.File(path) as f:
         assert f["R"].compression == "gzip" and not f["R"].fletcher32
-    assert evolve(capsys, *FAST, "-o", path, "--overwrite", "--checksum")[0] == 0
+    assert evolve(capsys, *FAST, "-o", path, "--overwrite")[0] == 0  # checksums by default
     with h5py.File(path) as f:
         assert f["R"].fletcher32 and f["v"].fletcher32 and f["R"].compression is None
+    assert evolve(capsys, *FAST, "-o", path, "--overwrite", "--checksum")[0] == 0  # the old flag: the default
+    with h5py.File(path) as f:
+        assert f["R"].fletcher32 and f["v"].fletcher32
     assert_same_run(hdf5.read(path), pnrotor.evolve(**FAST_KW))
     assert os.listdir(tmp_path) == ["run.h5"]
 
@@ -409,10 +412,9 @@ def test_parallel_batch_equals_serial_bitwise(method, in_tmp, capsys, monkeypatc
                     f"{rng.uniform(80, 120)!r},{sampling}")
     rows.append('10,10,"0,0,2","0,0,0",100,')  # fails in a worker
     write_text(in_tmp / "many.csv", "\n".join(rows) + "\n")
-    code, out_serial, _ = evolve(capsys, "--batch", "many.csv", "--jobs", "1", "-o", "serial.h5")
+    code, out_serial, _ = evolve(capsys, "--batch", "many.csv", "--jobs", "1", "-o", "serial.h5", "--no-checksum")
     assert code == 1 and "on this process" in out_serial
-    code, out_pool, _ = evolve(capsys, "--batch", "many.csv", "--jobs", "2", "--compression", "lzf",
-                               "--checksum")  # to waveforms/
+    code, out_pool, _ = evolve(capsys, "--batch", "many.csv", "--jobs", "2", "--compression", "lzf")  # to waveforms/
     assert code == 1 and "on 2 worker processes" in out_pool
     assert "FAILED row 11 (line 12) (T4_m10_m10_chi1-0,0,2_chi2-0,0,0_f100): |chi1| = 2.0 exceeds 1" in out_pool
     pool = in_tmp / "waveforms" / "many.h5"

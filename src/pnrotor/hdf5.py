@@ -4,14 +4,16 @@ This module owns the file format (documented for readers without pnrotor in docs
 every write and read of it:
 
 * `write(path, run)` stores a run dataclass: each field that is an array becomes a dataset (float64 stays
-  float64; contiguous, or chunked with optional gzip/lzf compression and optional Fletcher-32 checksums, see
-  `write`), each number, string, bool or ``None`` an
+  float64; chunked with a Fletcher-32 checksum per chunk and optional gzip/lzf compression, or with
+  ``checksum=False`` and no compression contiguous, see `write`), each number, string, bool or ``None`` an
   attribute, each dict a subgroup holding its items by the same rules, each list or tuple of numbers
   a dataset marked with a ``sequence`` attribute. The ``dense`` field (the integrator's dense output, a
   function rather than data) and other callables are not written. Metadata attributes name the
   dataclass (``kind``), the schema version (``pnrotor_schema``), ``pnrotor_version`` and ``created``.
 * `read(path)` rebuilds the same dataclass, bitwise: arrays with their dtype and bytes, numbers as
-  Python ``int``/``float``/``bool``, strings exactly.
+  Python ``int``/``float``/``bool``, strings exactly, after checking the run's layout (`layout_problems`: every
+  field present with its type, the arrays of `ARRAYS` with their dtype, shape and finite values, the inputs
+  and statistics of `REQUIRED_KEYS`); `write` checks the same before writing, so what it writes reads back.
 * Writes are atomic. The file is built under a temporary name beside the target,
   ``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp``, fsynced (the writeback of each large dataset starts in a background thread
   while the next is written), then renamed over the target with `os.replace`. Any exception,
@@ -27,23 +29,27 @@ every write and read of it:
 
 Files are written in HDF5's 1.10 format (``libver=("v110", "v110")``: readable by HDF5 1.10 and later),
 whose object headers carry checksums, so damaged metadata or attributes are an error on reading; damaged
-data are one only with ``checksum=True`` (Fletcher-32 per chunk).  Reading checks that the file exists,
-is HDF5, is not truncated, is a pnrotor file and has a schema version this pnrotor knows, and says which
-of these failed (`FileNotFoundError`, `IsADirectoryError` or `ValueError`); whatever else damage makes
-HDF5 raise while reading becomes a `ValueError` naming the file, never a traceback.
+data are one too with the default ``checksum=True`` (Fletcher-32 per chunk).  Reading checks that the file
+exists, is HDF5, is not truncated, is a pnrotor file and has a schema version this pnrotor knows, then the
+layout of the run, and says which of these failed (`FileNotFoundError`, `IsADirectoryError` or one
+`ValueError` naming the file and every problem found); whatever else damage makes HDF5 raise while reading
+becomes a `ValueError` naming the file, never a traceback.
 """
 
 import dataclasses
 import importlib
+import numbers
 import os
 import signal
 import socket
 import secrets
 import shutil
 import threading
+from collections import Counter
 from contextlib import ExitStack, contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import NamedTuple
 
 import h5py
 import numpy as np
@@ -76,32 +82,66 @@ _WRITEBACK_BYTES = 1 << 20  # a dataset this large starts the writeback of the f
 _GZIP_LEVEL = 1  # on 10⁶-sample PN-like data level 4 saved 1.5% of the size for 1.7× the write time
 _TEMPORARY_SUFFIX = ".pnrotor-tmp"
 
-_ROTOR = (
+
+
+class Array(NamedTuple):
+    """How an array field of a run is stored: its ``shape``, each entry an int, ``"N"`` (the number of samples,
+    the same in every array of the run) or a name in `_DIMENSIONS`; its ``units`` attribute; its ``dtype``
+    (either byte order). Its values must be finite."""
+
+    shape: tuple
+    units: str
+    dtype: str = "float64"
+
+
+_M = "M (G M / c^3, total mass M)"
+_ROTOR = Array(("N", 4), (
     "1; scalar-first unit quaternion (w, x, y, z), sign-continuous in time; "
     "frame vectors are R x R^-1, R y R^-1, R z R^-1 (Boyle 2016, eq:rotor-rotation)"
-)
-UNITS = {
-    "FrameHistory": {"t": "time unit of the angular velocity (omega in rad per unit)", "R": _ROTOR},
+))
+ARRAYS = {
+    "FrameHistory": {
+        "t": Array(("N",), "time unit of the angular velocity (omega in rad per unit)"),
+        "R": _ROTOR,
+    },
     "Evolution": {
-        "t": "M (G M / c^3, total mass M)",
-        "t_seconds": "s",
-        "v": "c; PN parameter v = (M Omega_orb)^(1/3)",
-        "Phi": "rad; orbital phase",
-        "chi1": "1; dimensionless spin S1 / m1^2, inertial-frame components",
-        "chi2": "1; dimensionless spin S2 / m2^2, inertial-frame components",
-        "ell_hat": "1; unit normal to the orbital plane, inertial-frame components",
+        "t": Array(("N",), _M),
+        "t_seconds": Array(("N",), "s"),
+        "v": Array(("N",), "c; PN parameter v = (M Omega_orb)^(1/3)"),
+        "Phi": Array(("N",), "rad; orbital phase"),
+        "chi1": Array(("N", 3), "1; dimensionless spin S1 / m1^2, inertial-frame components"),
+        "chi2": Array(("N", 3), "1; dimensionless spin S2 / m2^2, inertial-frame components"),
+        "ell_hat": Array(("N", 3), "1; unit normal to the orbital plane, inertial-frame components"),
         "R": _ROTOR,
     },
     "Modes": {
-        "t": "M (G M / c^3, total mass M)",
-        "t_seconds": "s",
-        "data": "strain at distance_Mpc, or r h / M if distance_Mpc is absent; row k is mode (l, m) with "
-                "k = l (l + 1) + m - 4, l = 2 ... ell_max (LALSuite's convention)",
+        "t": Array(("N",), _M),
+        "t_seconds": Array(("N",), "s"),
+        "data": Array(("modes", "N"), "strain at distance_Mpc, or r h / M if distance_Mpc is absent; row k is mode "
+                      "(l, m) with k = l (l + 1) + m - 4, l = 2 ... ell_max (LALSuite's convention)", "complex128"),
         "R": _ROTOR,
-        "Phi": "rad; orbital phase",
+        "Phi": Array(("N",), "rad; orbital phase"),
     },
 }
+"""The array fields of each run kind (`Array`): what `write` and `read` check, and their ``units``."""
+
+_DIMENSIONS = {"modes": lambda values: (values["ell_max"] + 1) ** 2 - 4}
+"""Named dimensions of `ARRAYS` other than N, from the run's other values (checked first)."""
+
+UNITS = {kind: {name: array.units for name, array in arrays.items()} for kind, arrays in ARRAYS.items()}
 """``units`` attribute written on a run's top-level datasets, by kind and field."""
+
+_EVOLUTION_INPUTS = ("m1_Msun", "m2_Msun", "kappa1", "kappa2", "ell_hat", "n_hat", "state", "spin_content",
+                     "M_seconds", "v_ref", "f_min_Hz")
+REQUIRED_KEYS = {
+    "Evolution": {
+        "inputs": _EVOLUTION_INPUTS,
+        "stats": ("nfev", "wall_time_s", "t_initial", "t_final", "v_final", "termination_backward"),
+    },
+    "Modes": {"inputs": ("M_seconds", "ell_max")},
+}
+"""Keys a run's dict fields must hold, by kind: those pnrotor itself reads from a stored run
+(`Evolution.span`, `Evolution.f_gw`, `pnrotor.modes`, `Modes.polarizations`, a resumed batch)."""
 
 
 # --------------------------------------------------------------------------------------------------
@@ -109,7 +149,7 @@ UNITS = {
 # --------------------------------------------------------------------------------------------------
 
 
-def write(path, run, *, overwrite=False, compression=None, checksum=False, group=None):
+def write(path, run, *, overwrite=False, compression=None, checksum=True, group=None):
     """Write the run dataclass `run` to `path` atomically and return the path.
 
     ``group=None`` makes a one-run file; ``group=NAME`` adds the run as group NAME of a batch file (created
@@ -118,22 +158,23 @@ def write(path, run, *, overwrite=False, compression=None, checksum=False, group
     ``overwrite=True``. ``compression`` is None, ``"gzip"`` (portable) or ``"lzf"`` (fast; readers need
     h5py or the lzf filter plugin).
 
-    ``checksum=True`` stores each array in chunks with a Fletcher-32 checksum (HDF5's filter, checked by
-    every HDF5 reader): a damaged byte is then an error on reading (`ValueError` from `read`) instead of a
-    wrong number. It is off by default because with it the uncompressed write of the 10⁶-sample
-    `Evolution` of benchmarks/bench_hdf5.py takes longer than computing it, and without it less
-    (measurements in docs/hdf5-schema.md). Without compression and checksums the arrays are
-    stored contiguous, HDF5 writing their own bytes. Files written either way (and older files, all chunked
-    with checksums) read the same.
+    ``checksum=True`` (the default) stores each array in chunks with a Fletcher-32 checksum (HDF5's filter,
+    checked by every HDF5 reader): a damaged byte is then an error on reading (`ValueError` from `read`)
+    instead of a wrong number. ``checksum=False``, for scratch files, stores the arrays contiguous when
+    uncompressed, HDF5 writing their own bytes, and writes faster (measurements in docs/hdf5-schema.md).
+    Files written either way read the same.
+
+    The run is checked first as `read` checks it (`layout_problems`: a `ValueError` naming the run's type
+    and every problem, e.g. a NaN in ``v``), so that every file written reads back.
     """
     path = Path(path)
-    _kind_of(run)
+    _check_run(run)
     _check_compression(compression)
     _check_checksum(checksum)
     if group is not None:
         _check_name(group, "group")
         with batch(path, overwrite=overwrite, compression=compression, checksum=checksum, append=True) as runs:
-            runs.add(group, run)
+            runs.add(group, run)  # checks the run
         return path
     _check_target(path, overwrite)
     with _replacing(path, overwrite) as f:
@@ -142,7 +183,7 @@ def write(path, run, *, overwrite=False, compression=None, checksum=False, group
 
 
 @contextmanager
-def batch(path, *, overwrite=False, compression=None, checksum=False, append=False, durable=True):
+def batch(path, *, overwrite=False, compression=None, checksum=True, append=False, durable=True):
     """Write many runs into the batch file `path`, atomically: a context manager that yields a `Batch`.
 
     ::
@@ -196,7 +237,7 @@ class Batch:
     `add` or `copy_from` raises, the batch holds no run of that name (nor the one of the file it was to
     replace) and can go on."""
 
-    def __init__(self, path, compression, overwrite, existing, durable, stack, checksum=False):
+    def __init__(self, path, compression, overwrite, existing, durable, stack, checksum=True):
         self.path, self.compression, self.checksum, self.names = path, compression, checksum, []
         self._overwrite, self._existing, self._durable, self._stack = overwrite, existing, durable, stack
         self._file, self._added = None, set()
@@ -205,8 +246,8 @@ class Batch:
         return len(self.names)
 
     def add(self, name, run):
-        """Write the run dataclass `run` as the run `name`, by the rules of `write`."""
-        _kind_of(run)
+        """Write the run dataclass `run` as the run `name`, by the rules of `write` (checked as it checks)."""
+        _check_run(run)
         with self._adding(name) as f:
             _put_run(f.create_group(name), run, self.compression, self.checksum)
 
@@ -246,25 +287,33 @@ class Batch:
 
 
 def read(path, group=None):
-    """The run stored in `path` (in its batch group `group`), as the dataclass it was written from."""
+    """The run stored in `path` (in its batch group `group`), as the dataclass it was written from.
+
+    Before the dataclass is built the run's layout is checked: its metadata attributes (`metadata`), its
+    ``kind`` (a registered dataclass, `KINDS`) and then `layout_problems`: every stored field of that
+    dataclass present, no other, each of the type its annotation names (a dataset for an array, a group for
+    a dict, an attribute of that type otherwise); the arrays of `ARRAYS` of the dtype and shape given there,
+    all of the same number of samples N, with finite values; the keys of `REQUIRED_KEYS` in its inputs and
+    statistics. Any problem raises one `ValueError` naming the file (and run) and every problem found, e.g.
+    ``run.h5: dataset 'R' has shape (10, 3), expected (10, 4)``."""
     with _open(path) as f:
         g = _run_group(f, path, group)
-        cls = _class_of(g.attrs.get("kind"), path)
+        where = path if group is None else f"{path} run {group!r}"
+        _check_metadata(g, where)
+        cls = _class_of(g.attrs.get("kind"), where)
         values = _get(g, skip=_METADATA)
-        fields = {f.name for f in dataclasses.fields(cls)}
-        stored = fields - NOT_WRITTEN
-        if values.keys() - fields or stored - values.keys() - _defaulted(cls):
-            raise ValueError(
-                f"{path}: stored fields {sorted(values)} do not match {cls.__name__} "
-                f"{sorted(stored)}; the file is damaged or from an incompatible pnrotor"
-            )
+        problems = layout_problems(cls, values)
+        if problems:
+            raise ValueError(f"{where}: {'; '.join(problems)}")
         return cls(**values)
 
 
 def metadata(path, group=None):
-    """The metadata attributes of a run: ``kind``, ``pnrotor_schema``, ``pnrotor_version``, ``created``."""
+    """The metadata attributes of a run: ``kind``, ``pnrotor_schema``, ``pnrotor_version``, ``created``
+    (checked: all four present, the schema version one this pnrotor reads, the others strings)."""
     with _open(path) as f:
         g = _run_group(f, path, group)
+        _check_metadata(g, path if group is None else f"{path} run {group!r}")
         return {name: _value(g.attrs[name]) for name in _METADATA}
 
 
@@ -272,6 +321,112 @@ def list_runs(path):
     """Names of the runs in a batch file, sorted; ``["/"]`` for a one-run file. Each works as `read`'s group."""
     with _open(path) as f:
         return _runs(f)
+
+
+def layout_problems(cls, values):
+    """What is wrong with the run `values` (field name → value, as `read` gets them from a file or `write`
+    from a dataclass) of the run dataclass `cls`, as a list of sentences (empty: nothing). Checked:
+
+    * names: every field of `cls` present but those not written (`NOT_WRITTEN`, callable defaults), no other;
+    * types, by each field's annotation (`_TYPES`): ``np.ndarray`` a numeric array (a dataset), ``dict`` a
+      dict (a group), ``str``, ``int``, ``float`` such a scalar (an attribute; an int counts as a float,
+      a bool as neither), or ``None`` where that is the default; other annotations are not checked;
+    * for the kinds in `ARRAYS`, each array's dtype (either byte order) and shape, every ``"N"`` the same
+      number of samples (that of most arrays, a tie going to the first), and its values finite;
+    * for the kinds in `REQUIRED_KEYS`, the keys their dict fields must hold.
+    """
+    problems, kind = [], cls.__name__
+    fields = {field.name: field for field in dataclasses.fields(cls)}
+    for name in sorted(values.keys() - fields.keys()):
+        problems.append(f"{_what(values[name])} {name!r} is not a field of {kind}")
+    for name, field in fields.items():
+        if name in NOT_WRITTEN or callable(field.default):
+            continue
+        check, stored_as, expected = _TYPES.get(getattr(field.type, "__name__", field.type), (None, "field", ""))
+        if name not in values:
+            problems.append(f"{stored_as} {name!r} is missing")
+        elif check and not check(values[name]) and not (values[name] is None and field.default is None):
+            problems.append(f"{_what(values[name])} {name!r} is {_describe(values[name])}, expected {expected}")
+    if problems:
+        return problems  # shapes and keys need the right fields
+    arrays = ARRAYS.get(kind, {})
+    lengths = {name: values[name].shape[spec.shape.index("N")] for name, spec in arrays.items()
+               if "N" in spec.shape and values[name].ndim == len(spec.shape)}
+    n, count = Counter(lengths.values()).most_common(1)[0] if lengths else (None, 0)
+    like = [name for name, length in lengths.items() if length == n]
+    for name, spec in arrays.items():
+        array = values[name]
+        sizes = {"N": n, **{dim: size(values) for dim, size in _DIMENSIONS.items() if dim in spec.shape}}
+        shape = tuple(d if sizes.get(d, d) is None else sizes.get(d, d) for d in spec.shape)
+        if array.dtype.newbyteorder("=") != np.dtype(spec.dtype):
+            problems.append(f"dataset {name!r} is {array.dtype.name}, expected {np.dtype(spec.dtype).name}")
+        elif array.shape != shape:
+            others = f" and {count - 1} other array{'s' * (count > 2)}" if count > 1 else ""
+            samples = f" (N = {n} samples, as in {like[0]!r}{others})" if lengths.get(name, n) != n else ""
+            problems.append(f"dataset {name!r} has shape {_shape(array.shape)}, expected {_shape(shape)}{samples}")
+        elif not np.isfinite(array).all():
+            bad = np.argwhere(~np.isfinite(array))
+            at = tuple(bad[0].tolist()) if array.ndim > 1 else int(bad[0, 0])
+            problems.append(f"dataset {name!r} has {len(bad)} non-finite value{'s' * (len(bad) > 1)} "
+                            f"(NaN or inf), the first at index {at}")
+    for name, keys in REQUIRED_KEYS.get(kind, {}).items():
+        missing = [key for key in keys if key not in values[name]]
+        if missing:
+            problems.append(f"group {name!r} lacks {', '.join(map(repr, missing))}")
+    return problems
+
+
+_TYPES = {
+    "ndarray": (lambda v: isinstance(v, np.ndarray) and v.dtype.kind in _ARRAY_KINDS, "dataset", "a numeric array"),
+    "dict": (lambda v: isinstance(v, dict), "group", "a group"),
+    "str": (lambda v: isinstance(v, str), "attribute", "a string"),
+    "int": (lambda v: isinstance(v, numbers.Integral) and not isinstance(v, bool), "attribute", "an integer"),
+    "float": (lambda v: isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)), "attribute", "a number"),
+}
+"""Annotation of a run field → (check of a value, what stores it, what it must be) for `layout_problems`."""
+
+
+def _what(value):
+    """What a value read from a file was stored as."""
+    return "group" if isinstance(value, dict) else "dataset" if isinstance(value, (np.ndarray, list, tuple)) \
+        else "attribute"
+
+
+def _describe(value):
+    if isinstance(value, np.ndarray):
+        return f"{'an' if value.dtype.name[0] in 'aeiou' else 'a'} {value.dtype.name} array"
+    if isinstance(value, dict):
+        return "a group"
+    if value is None:
+        return "empty"
+    text = repr(value)
+    return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
+
+
+def _shape(shape):
+    return f"({', '.join(map(str, shape))}{',' * (len(shape) == 1)})"
+
+
+def _check_run(run):
+    """Raise `ValueError` unless the run dataclass `run` is one `read` would accept back (`layout_problems`)."""
+    kind = _kind_of(run)
+    values = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
+    values = {name: value for name, value in values.items() if name not in NOT_WRITTEN and not callable(value)}
+    problems = layout_problems(type(run), values)
+    if problems:
+        raise ValueError(f"cannot write this {kind}: {'; '.join(problems)}")
+    return kind
+
+
+def _check_metadata(g, where):
+    """Raise `ValueError` unless group `g` has the four metadata attributes, ``kind``, ``pnrotor_version``
+    and ``created`` strings (the schema version is checked on opening)."""
+    missing = [name for name in _METADATA if name not in g.attrs]
+    wrong = [name for name in ("kind", "pnrotor_version", "created") if name in g.attrs
+             and not isinstance(g.attrs[name], str)]
+    if missing or wrong:
+        raise ValueError(f"{where}: " + "; ".join([f"attribute {name!r} is missing" for name in missing]
+                                                 + [f"attribute {name!r} is not a string" for name in wrong]))
 
 
 # --------------------------------------------------------------------------------------------------

@@ -165,7 +165,7 @@ _TABLE = "table.sha256"
 """In the parts folder: the fingerprint of the table whose runs it holds."""
 
 
-def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compression=None, checksum=False,
+def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compression=None, checksum=True,
          defaults=None, create_folder=False, resume=False):
     """Check a batch before it runs → :class:`Plan`.
 

@@ -75,9 +75,10 @@ def add_parser(subparsers):
                         "for --batch STEM.csv); its folder must exist")
     output.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     output.add_argument("--compression", choices=("gzip", "lzf"), help="compress the datasets (default: none)")
-    output.add_argument("--checksum", action="store_true",
-                        help="store a Fletcher-32 checksum per chunk, so damaged bytes are an error on reading "
-                        "(about 2x the write time uncompressed)")
+    output.add_argument("--no-checksum", dest="checksum", action="store_false", default=True,
+                        help="no Fletcher-32 checksums, for scratch files (faster writes; damaged bytes then read "
+                        "back as wrong numbers); by default each chunk has one, so damage is an error on reading")
+    output.add_argument("--checksum", action="store_true", default=True, help="the default; kept for old scripts")
     waves = parser.add_argument_group("waveform modes (one run)")
     waves.add_argument("--modes", action="store_true",
                        help="also compute the modes h_lm (pnrotor.modes) and write the file with two groups, "
