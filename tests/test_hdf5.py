@@ -199,7 +199,7 @@ def test_attributes_and_datasets_are_complete(tmp_path):
     hdf5.write(tmp_path / "run.h5", history, compression="gzip")
     with h5py.File(tmp_path / "run.h5", "r") as f:
         scalars = {f.name for f in dataclasses.fields(FrameHistory)} - {"t", "R", "inputs", "dense"}
-        assert set(f.attrs) == scalars | {"kind", "pnrotor_schema", "pnrotor_version", "created"}
+        assert set(f.attrs) == scalars | {"kind", "pnrotor_schema", "pnrotor_version", "created", "pnrotor_strings_crc32"}
         assert f.attrs["kind"] == "FrameHistory" and f.attrs["pnrotor_version"] == __version__
         assert f.attrs["pnrotor_schema"] == hdf5.SCHEMA_VERSION and isinstance(f.attrs["pnrotor_schema"], np.integer)
         created = datetime.fromisoformat(f.attrs["created"])
