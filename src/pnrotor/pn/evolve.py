@@ -36,13 +36,15 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 * ``'not_integrated'`` — backward half only, when no f_min was given.
 """
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..ode import EVENTS_SIG, RHS_SIG, by_address, dop853
+from ..ode import EVENTS_SIG, RHS_SIG, by_address
+from ..ode.dop853 import OUT_FINAL, OUT_STEPS, _controller, _default_hook, _integrate
 from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
 from . import initial as _ini
@@ -71,6 +73,8 @@ CONTROLLER = dict(safety=0.85, max_factor=4.0)
 """DOP853 step-size controller for the inspiral.  With Hairer's defaults (0.9, 6) the accelerating chirp
 makes every few steps a rejection (18–57 of 116–216 attempts in the LALSuite comparison cases); with
 (0.85, 4) there are none and the runs cost 10–35% fewer evaluations (benchmarks/bench_pn.py)."""
+_CONTROLLER = _controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
+"""(safety, min_factor, max_factor) as :func:`pnrotor.ode.dop853` would check them (min_factor its default)."""
 
 
 @dataclass
@@ -226,13 +230,26 @@ def half(s, system, forward):
     return p, t_end, _BACKWARD_EVENTS, "f_min"
 
 
+_NO_T_EVAL = np.empty(0)
+
+
 def integrate_half(s, system, forward, t_eval, dense):
-    """DOP853 from f_ref over the forward or backward :func:`half` → (OdeResult, termination name)."""
+    """DOP853 from f_ref over the forward or backward :func:`half` → (OdeResult, termination name); ``t_eval``
+    is None (every step) or 'final'.  What :func:`pnrotor.ode.dop853` would check is guaranteed by
+    :func:`~pnrotor.pn.settings.settings` and :func:`build_system`, so its core is called directly
+    (``pnrotor.ode.dop853._integrate``)."""
     p, t_end, directions, end = half(s, system, forward)
-    res = dop853(system.rhs, 0.0, system.y0, t_end, s.atol, rtol=s.rtol, args=p, max_steps=s.max_steps,
-                 t_eval=t_eval, dense=dense, events=system.events, n_events=_sys.N_EVENTS, **CONTROLLER,
-                 event_direction=directions)
+    res = _integrate(system.rhs, _default_hook("after_step"), system.events, 0.0, system.y0, t_end, p,
+                     *_tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
+                     _NO_T_EVAL, OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, _sys.N_EVENTS, directions,
+                     *_CONTROLLER)
     return res, termination(res.status, res.event_index, end, s.approximant)
+
+
+@functools.lru_cache(maxsize=8)
+def _tolerances(n, atol, rtol):
+    """(atol, rtol) per component as the core takes them; cached, as the core only reads them."""
+    return np.full(n, atol), np.full(n, rtol)
 
 
 def termination(status, idx, end, approximant):
@@ -336,14 +353,18 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
                      chi1=x1, chi2=x2, R=R, ell_hat=ellh, termination=term_f, stats=stats, inputs=inputs)
 
 
+_STATS_KEYS = [(key, f"{key}_forward", f"{key}_backward") for key in ("nfev", "nsteps", "naccepted", "nrejected")]
+
+
 def _stats(res_f, res_b, term_f, term_b):
     """`Evolution.stats` but the wall times: the work of both halves, their terminations and the span."""
-    halves = {"forward": res_f, "backward": res_b}
     stats = {}
-    for key in ("nfev", "nsteps", "naccepted", "nrejected"):
-        stats[key] = sum(getattr(r, key) for r in halves.values() if r is not None)
-        for name, r in halves.items():
-            stats[f"{key}_{name}"] = getattr(r, key) if r is not None else 0
+    for key, key_f, key_b in _STATS_KEYS:
+        f = getattr(res_f, key)
+        b = getattr(res_b, key) if res_b is not None else 0
+        stats[key] = f + b
+        stats[key_f] = f
+        stats[key_b] = b
     stats["termination_backward"] = term_b
     stats["termination_message"] = TERMINATION_MESSAGES[term_f]
     stats["termination_backward_message"] = TERMINATION_MESSAGES[term_b]

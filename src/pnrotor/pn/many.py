@@ -24,9 +24,8 @@ import numpy as np
 from numba import njit, prange
 
 from ..ode import AFTER_STEP_SIG, by_address
-from ..ode.dop853 import (IV_EVENT, IV_NFEV, IV_NOUT, IV_NSTEPS, IV_STATUS, OUT_FINAL, _controller,
-                          _dop853_core, _validate_tolerances, no_after_step)
-from .evolve import CONTROLLER, TERMINATION_MESSAGES, build_system, half, termination
+from ..ode.dop853 import IV_EVENT, IV_NFEV, IV_NOUT, IV_NSTEPS, IV_STATUS, OUT_FINAL, _dop853_core, no_after_step
+from .evolve import _CONTROLLER, TERMINATION_MESSAGES, _tolerances, build_system, half, termination
 from .sampling import _fill_history, output_mode
 from .settings import settings
 
@@ -174,12 +173,11 @@ integrate_rotor, precession, max_steps
         groups.setdefault(key, []).append((i, system.y0, p, t_end, directions, s))
     counts = np.zeros((n, 4), dtype=np.int64)
     after_step = by_address(no_after_step, AFTER_STEP_SIG)
-    safety, min_factor, max_factor = _controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
     for (rhs, events, mode, size), members in groups.items():
-        atol_a, rtol_a = _validate_tolerances(atol, rtol, size)
+        atol_a, rtol_a = _tolerances(size, float(atol), float(rtol))
         rows, y0, p, t_end, directions, ss = zip(*members)
         _integrate_all(rhs, after_step, events, np.array(y0), np.array(p), np.array(t_end), np.array(directions),
-                       atol_a, rtol_a, int(max_steps), safety, min_factor, max_factor, mode,
+                       atol_a, rtol_a, int(max_steps), *_CONTROLLER, mode,
                        np.array([s.R0 for s in ss]), np.array([s.ell_hat for s in ss]),
                        np.array([s.chi1 for s in ss]), np.array([s.chi2 for s in ss]),
                        np.array(rows, dtype=np.int64), out.t, out.v, out.Phi, out.chi1, out.chi2, out.R,

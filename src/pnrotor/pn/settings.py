@@ -9,6 +9,7 @@ input is a ``ValueError`` naming the parameter and its allowed range.  No numba 
 (:mod:`pnrotor.pn.evolve`, :mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
 """
 
+import functools
 import math
 import numbers
 from dataclasses import dataclass
@@ -126,6 +127,10 @@ def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, 
     if (isinstance(atol, bool) or isinstance(rtol, bool) or not (atol > 0.0 and math.isfinite(atol))
             or not (rtol >= 0.0 and math.isfinite(rtol))):
         raise ValueError(f"atol must be > 0 and rtol >= 0, both finite; got atol = {atol!r}, rtol = {rtol!r}")
+    if isinstance(max_steps, (bool, np.bool_)) or not isinstance(max_steps, (int, np.integer)):
+        raise ValueError(f"max_steps must be an integer >= 1, got {max_steps!r}")
+    if max_steps < 1:
+        raise ValueError(f"max_steps must be >= 1, got {max_steps!r}")
     if precession not in PRECESSION:
         raise ValueError(f"precession must be 'averaged', 'averaged_varpi' or 'instantaneous', got {precession!r}")
     if precession == "instantaneous":
@@ -137,7 +142,16 @@ def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, 
     spin_content, c1, c2 = _spin_content(c1, c2, ell)
     return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, approximant, pn_order, so_order, ss_order, ell, n, kappa1,
                     kappa2, atol, rtol, mode, sval, rotor, precession_phase_shift, integrate_rotor, precession,
-                    max_steps, M_sec, X1, X1 * (1.0 - X1), v0, v_min, v_max, _ini.frame_rotor(ell, n), spin_content)
+                    int(max_steps), M_sec, X1, X1 * (1.0 - X1), v0, v_min, v_max,
+                    _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
+
+
+@functools.lru_cache(maxsize=16)
+def _frame_rotor(ell_n):
+    """:func:`pnrotor.pn.initial.frame_rotor` of ℓ̂, n̂ given as the bytes of the two float64 arrays, cached
+    (exact key, so signed zeros too): runs usually share their frame, and the rotor costs ~4 µs."""
+    ell_n = np.frombuffer(ell_n)
+    return _ini.frame_rotor(ell_n[:3], ell_n[3:])
 
 
 def _kappa(kappa, name):
@@ -179,12 +193,17 @@ def _frequencies(m1, m2, f_ref, f_min, f_max):
 def _spin_content(c1, c2, ell):
     """('nonspinning' | 'aligned' | 'precessing', χ₁, χ₂); aligned spins (in-plane parts ≤ 1e-14) are made
     exactly parallel to ℓ̂."""
-    perp1 = c1 - np.dot(c1, ell) * ell
-    perp2 = c2 - np.dot(c2, ell) * ell
-    if np.dot(perp1, perp1) > 1e-28 or np.dot(perp2, perp2) > 1e-28:
-        return "precessing", c1, c2
-    content = "aligned" if np.any(c1) or np.any(c2) else "nonspinning"
-    return content, np.dot(c1, ell) * ell, np.dot(c2, ell) * ell
+    a1 = np.dot(c1, ell)
+    a2 = np.dot(c2, ell)
+    if any(c1.tolist()) or any(c2.tolist()):
+        perp1 = c1 - a1 * ell
+        perp2 = c2 - a2 * ell
+        if np.dot(perp1, perp1) > 1e-28 or np.dot(perp2, perp2) > 1e-28:
+            return "precessing", c1, c2
+        content = "aligned"
+    else:
+        content = "nonspinning"   # (zero spins have no in-plane part)
+    return content, a1 * ell, a2 * ell
 
 
 def normalize_approximant(approximant):

@@ -66,6 +66,7 @@ Events (all terminal), filled by :func:`events_precessing` / :func:`events_align
      ignores the precession's slow modulation of v̇ through the spin invariants.
 """
 
+import functools
 import math
 
 import numpy as np
@@ -448,11 +449,33 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     precessing one.
     With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′, event 6) at
     v_check) instead of p, for checking the initial point.
+    Everything but v_end and the stored series comes from :func:`_spin_independent_parts` (cached).
     """
+    head, N, D, Ep = _spin_independent_parts(
+        (X1, approximant, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
+         math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), rotor, bool(phase_shift), omega_l))
+    p = head.copy()
+    p[P_VEND] = v_end
+    fold = aligned_basis is not None
+    b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
+    at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
+    return p if v_check is None else (p, at_v)
+
+
+@functools.lru_cache(maxsize=64)
+def _spin_independent_parts(key):
+    """(p without v_end and the series, and the series N, D, Ê′ of :func:`vdot_series`) for ``key`` = (X1,
+    approximant, kmax as a tuple, so_order, ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives
+    other signed zeros), rotor, phase_shift, omega_l): everything
+    :func:`make_parameters` builds that does not depend on the spins or v_end, ~45 µs of Python, kept in a
+    small LRU cache (repeated runs of one binary, or of one mass ratio, skip it; code that replaces a
+    coefficient function must call ``_spin_independent_parts.cache_clear()``).  The arrays are shared:
+    make_parameters copies p and only reads the series."""
     from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms,
                              spin_orbit_precession, spin_spin_precession_2pn, spin_spin_precession_3pn,
                              spin_spin_precession_3pn_instantaneous, varpi_coefficients)
 
+    X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, _, _, rotor, phase_shift, omega_l = key
     X2 = 1.0 - X1
     nu = X1 * X2
     p = np.zeros(P_SIZE)
@@ -460,7 +483,6 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     p[P_X2] = X2
     p[P_NU] = nu
     p[P_VDOT0] = 32.0 * nu / 5.0
-    p[P_VEND] = v_end
     if rotor not in ("coprecessing", "orbital"):
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     p[P_ROTOR] = 1.0 if rotor == "orbital" else 0.0
@@ -495,12 +517,7 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     p[P_L4] = L4 if inc["so_nnlo"] else 0.0
     p[P_SPINTOL] = SPIN_TOL
     p[P_DEN_EPS] = DEN_EPS
-
-    N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2)
-    fold = aligned_basis is not None
-    b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
-    at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
-    return p if v_check is None else (p, at_v)
+    return (p,) + vdot_series(X1, approximant, np.array(kmax, dtype=np.int64), kappa1, kappa2)
 
 
 _UNIT_BASIS = np.array([1.0, 0, 0, 0, 0, 0, 0, 0, 0])
