@@ -7,21 +7,19 @@ spins (1.4 + 1.4 M☉) from 40 Hz, each to the end of the T4 inspiral (fEnd = 0 
 the same model — T4 with LALSuite's SpinTaylorT4 truncation (``pnrotor.pn.lalsuite_orders("T4")``: 3.5PN,
 spin-orbit 3PN, spin-spin 3PN, precession phase shift on) — and the same output: uniform samples
 t = kΔt, Δt = 1/4096 s, t = 0 at f_ref (pnrotor's dense output, LAL's grid from fStart, scipy's t_eval).
-``--cases BNS-precessing-20Hz`` adds the same BNS from 20 Hz (2570 orbits), where float64 round-off
-(below) keeps every atol above 1e-9 rad.
+``--cases BNS-precessing-20Hz`` adds the same BNS from 20 Hz (2570 orbits).
 
-Error against a converged reference.  The plain choice, pnrotor at atol 1e-15 checked against atol 5e-16,
-does not converge on the long cases: the two differ by ~1.2e-9 rad (NSBH, BNS) because float64 round-off
-in the state update y + h Σ bⱼkⱼ (each step's result is rounded to ~1e-16 of |v|, |Φ|, not of the
-increment, and an early δv is a time shift that the chirp turns into phase) sets a floor of
-~1e-10–1e-9 rad that no atol removes: more steps, more round-off.  The reference is therefore
-``compensated_reference``: the same 12-stage 8th-order DOP853 formula (``pnrotor.ode.tableau``) on
-pnrotor's right-hand side, on a fixed mesh = pnrotor's accepted steps at atol 1e-15 ∪ the output grid,
-every interval halved, with the state carried as y + lo (TwoSum compensated summation) and the mesh times
-given, not accumulated.  Its own error is the difference to the
-same on the unhalved mesh (≤ 1e-12 rad here; without the compensation the same mesh gives 5e-9–1e-8).
-Both the reference and every run are compared on pnrotor's own grid (``Evolution.t`` of the atol-1e-15
-run, t = kΔt bit for bit).  Runs at different tolerances end at slightly different times (the terminal
+Error against a converged reference: ``compensated_reference``, the same 12-stage 8th-order DOP853 formula
+(``pnrotor.ode.tableau``) on pnrotor's right-hand side, on a fixed mesh = pnrotor's accepted steps at atol
+1e-15 ∪ the output grid, every interval halved, with the state carried as y + lo (TwoSum compensated
+summation) and the mesh times given, not accumulated.  Its own error is the difference to the same on the
+unhalved mesh (≤ 1e-11 rad here).  Before pnrotor's DOP853 compensated its own state update, float64
+round-off of y + h Σ bⱼkⱼ (~ulp(Φ) per step, and an early δv is a time shift the chirp turns into phase) set
+a floor of ~1e-10–2e-9 rad on these long runs that no atol removed (pnrotor at 1e-15 and 5e-16 differed by
+1.2e-9 rad); with it they differ by 2e-11–5e-11.
+
+Both the reference and every run are compared on pnrotor's own grid (``Evolution.t`` of the atol-1e-15 run,
+t = kΔt bit for bit).  Runs at different tolerances end at slightly different times (the terminal
 event moves with the error), so every comparison is over the common span only: the first
 min(N_run, N_ref) samples.  Per sample:
 
@@ -88,7 +86,7 @@ CASES = {
                         "10+1.4, chi1=(0.5,0.2,0.4), chi2=(0.03,0,0.02)"),
     "BNS-precessing": (1.4, 1.4, [0.02, 0.01, 0.03], [0, -0.03, 0.02], 40.0,
                        "1.4+1.4, chi1=(0.02,0.01,0.03), chi2=(0,-0.03,0.02)"),
-    # not run by default (6.6e5 samples, 2570 orbits): where the round-off floor exceeds 1e-9 rad
+    # not run by default (6.6e5 samples, 2570 orbits, ~40 s)
     "BNS-precessing-20Hz": (1.4, 1.4, [0.02, 0.01, 0.03], [0, -0.03, 0.02], 20.0,
                             "1.4+1.4, chi1=(0.02,0.01,0.03), chi2=(0,-0.03,0.02)"),
 }
@@ -488,7 +486,7 @@ def main():
         print(f"  {a:7.0e} {t['frame']:11.2e} {t['case']:19s} {t['phase']:11.2e} {t['ms']:8.2f} {t['min_ms']:8.2f} "
               f"{t['integr']:9.2f} "
               f"{t['nfev']:8d} {rel}")
-    print("  smallest frame error reached per case (where tightening atol stops helping: float64 round-off in the "
+    print("  smallest frame error reached per case (where tightening atol stops helping: round-off in the "
           "state)")
     for n in args.cases:
         pn = pn_rows(n)
