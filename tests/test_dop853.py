@@ -559,3 +559,16 @@ def test_lazy_njit_rhs_is_accepted():
 def test_scipy_version_has_dop853():
     # the scipy comparison above relies on scipy's DOP853 (present since 1.4)
     assert tuple(int(x) for x in scipy.__version__.split(".")[:2]) >= (1, 4)
+
+
+def test_compensated_summation_keeps_long_sums_exact():
+    """y' = 0.1 from y = 1000 over 10⁵ steps of 0.01: every step adds 0.001, which float64 cannot add to 1000
+    without rounding.  The compensated update (module docstring) ends on 1100 exactly; a plain y + h Σ bⱼkⱼ
+    ended 2.3e-9 away (measured before it was compensated)."""
+    @njit(RHS_SIG)
+    def constant(t, y, p, dydt):
+        dydt[0] = 0.1
+
+    r = dop853(constant, 0.0, [1000.0], 1000.0, atol=1e-10, max_step=0.01, t_eval="final")
+    assert r.nsteps > 99_999
+    assert abs(r.y[-1, 0] - 1100.0) <= np.spacing(1100.0)
