@@ -23,7 +23,7 @@ ls = pytest.importorskip("lalsimulation")
 
 from pn_cases import CASES as ALL_CASES  # noqa: E402
 
-from pnrotor.interop.lal import spintaylor_series  # noqa: E402
+from pnrotor.interop.lal import polarization_series, sph_harm_time_series, spintaylor_series  # noqa: E402
 from pnrotor.pn import evolve, lalsuite_orders  # noqa: E402
 from pnrotor.waveform.modes import modes  # noqa: E402
 
@@ -96,3 +96,31 @@ def test_lal_l3_spin_terms_take_the_sum_of_the_spins_for_their_average(case):
         diff = differences(case, theirs)
         worst = max(diff[(3, m)] for m in range(-3, 4))
         assert worst < bound if bound else worst > 5e-4, (factor, worst)
+
+
+def test_modes_and_polarizations_go_to_lal_series():
+    """pnrotor's modes as LAL's SphHarmTimeSeries hold the same numbers, epoch and Δt; LAL's own sum of them
+    (SimInspiralPolarizationsFromSphHarmTimeSeries, azimuth given directly) at azimuth π/2 − φ_ref equals
+    pnrotor's h₊, h× for (ι, φ_ref): an independent check of the polarization convention."""
+    run = evolve(*ALL_CASES["q3-precessing"], sampling=DT, f_min=15.0)
+    m = modes(run, ell_max=4, distance=DISTANCE_MPC)
+    hlms = sph_harm_time_series(m)
+    assert ls.SphHarmTimeSeriesGetMaxL(hlms) == 4
+    for ell, mm in m.ell_m:
+        series = ls.SphHarmTimeSeriesGetMode(hlms, ell, mm)
+        np.testing.assert_array_equal(series.data.data, m.mode(ell, mm))
+        assert series.deltaT == DT and float(series.epoch) == pytest.approx(m.t_seconds[0], abs=1e-9)
+    for iota, phi_ref in ((0.7, 0.3), (2.9, 4.0)):
+        hp, hc = polarization_series(m, iota, phi_ref)
+        lp, lc = ls.SimInspiralPolarizationsFromSphHarmTimeSeries(hlms, iota, np.pi / 2 - phi_ref)
+        scale = np.max(np.abs(hp.data.data))
+        assert np.max(np.abs(lp.data.data - hp.data.data)) < 1e-14 * scale
+        assert np.max(np.abs(lc.data.data - hc.data.data)) < 1e-14 * scale
+
+
+def test_lal_series_need_strain_and_uniform_samples():
+    run = evolve(*ALL_CASES["q3-precessing"], sampling=DT)
+    with pytest.raises(ValueError, match="distance"):
+        sph_harm_time_series(modes(run, ell_max=2))
+    with pytest.raises(ValueError, match="uniform samples"):
+        sph_harm_time_series(modes(evolve(*ALL_CASES["q3-precessing"]), ell_max=2, distance=DISTANCE_MPC))

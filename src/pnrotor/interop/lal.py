@@ -1,4 +1,5 @@
-"""LALSuite's SpinTaylor orbit evolution, called the way pnrotor compares itself with it.
+"""LALSuite's SpinTaylor orbit evolution, called the way pnrotor compares itself with it, and pnrotor's
+modes handed to LALSuite.
 
 One place for the call that tests and benchmarks share.  With ``pnrotor.pn.lalsuite_orders(approximant)``
 on pnrotor's side, ``lalsimulation.SimInspiralSpinTaylorPNEvolveOrbit`` is called with spinO = −1 (all
@@ -9,6 +10,10 @@ recorded in the project's ``LAL-CONVENTIONS.md``:
 * the frame is n̂ = cos Φ E1 + sin Φ (L̂N × E1), λ̂ = L̂N × n̂, ℓ̂ = L̂N, with ℓ̂ = LNhat and n̂ = E1 at fStart;
 * sample i is at t = i Δt after fStart, up to LAL's own end of the inspiral (fEnd = 0).
 
+:func:`sph_harm_time_series` and :func:`polarization_series` give :class:`pnrotor.waveform.modes.Modes` to
+LALSuite as its ``SphHarmTimeSeries`` and ``REAL8TimeSeries`` (what ``SimInspiralChooseTDModes`` and
+``SimInspiralChooseTDWaveform`` return), for LAL's own tools.
+
 Importing this module needs ``lal`` and ``lalsimulation`` (``pip install lalsuite``).
 """
 
@@ -16,7 +21,7 @@ import lal
 import lalsimulation
 import numpy as np
 
-__all__ = ["spintaylor_series", "spintaylor_orbit"]
+__all__ = ["spintaylor_series", "spintaylor_orbit", "sph_harm_time_series", "polarization_series"]
 
 
 def spintaylor_series(m1, m2, chi1, chi2, f_start, approximant="T4", delta_t=1.0 / 4096,
@@ -39,3 +44,50 @@ def spintaylor_orbit(*args, **kwargs):
                                                                   spintaylor_series(*args, **kwargs)]
     return dict(v=V, Phi=Phi, chi1=np.column_stack((S1x, S1y, S1z)), chi2=np.column_stack((S2x, S2y, S2z)),
                 ell=np.column_stack((Lx, Ly, Lz)), e1=np.column_stack((Ex, Ey, Ez)))
+
+
+def _uniform_step(modes):
+    """Δt in s of modes sampled uniformly (``sampling=Δt``), else a ValueError: LAL's series have one Δt."""
+    t = modes.t_seconds
+    if t.size < 2:
+        raise ValueError("LAL time series need at least 2 samples")
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    if np.max(np.abs(np.diff(t) - dt)) > 1e-9 * dt:
+        raise ValueError("LAL time series need uniform samples: evolve with sampling=Δt (seconds)")
+    return dt
+
+
+def _series(create, name, epoch, dt, unit, data):
+    series = create(name, lal.LIGOTimeGPS(epoch), 0.0, dt, unit, data.size)
+    series.data.data[:] = data
+    return series
+
+
+def sph_harm_time_series(modes):
+    """The inertial modes h_ℓm of ``modes`` (strain at their distance) as LAL's ``SphHarmTimeSeries``: one
+    ``COMPLEX16TimeSeries`` per (ℓ, m), epoch the first sample's time (t = 0 at f_ref), Δt the sampling.
+
+    LAL's Python binding of ``SphHarmTimeSeriesAddMode`` returns the list it was given in a second owning
+    wrapper (freeing both crashed the interpreter, measured); the given one is disowned."""
+    if modes.distance_Mpc is None:
+        raise ValueError("LAL's modes are strain: compute the modes with a distance (pnrotor.modes(run, "
+                         "distance=...))")
+    dt = _uniform_step(modes)
+    inertial = modes.in_frame("inertial")
+    hlms = None
+    for (ell, m), h in zip(inertial.ell_m, inertial.data):
+        mode = _series(lal.CreateCOMPLEX16TimeSeries, f"h{ell}{m}", modes.t_seconds[0], dt, lal.StrainUnit, h)
+        appended = lalsimulation.SphHarmTimeSeriesAddMode(hlms, mode, ell, m)   # copies the mode
+        if hlms is not None:
+            hlms.this.disown()
+        hlms = appended
+    return hlms
+
+
+def polarization_series(modes, inclination, phi_ref=0.0, distance=None, psi=0.0):
+    """h₊, h× of :meth:`pnrotor.waveform.modes.Modes.polarizations` (same arguments) as two LAL
+    ``REAL8TimeSeries`` (strain; epoch the first sample's time, Δt the sampling)."""
+    dt = _uniform_step(modes)
+    hp, hc = modes.polarizations(inclination, phi_ref, distance, psi)
+    return tuple(_series(lal.CreateREAL8TimeSeries, name, modes.t_seconds[0], dt, lal.StrainUnit, h)
+                 for name, h in (("hplus", hp), ("hcross", hc)))
