@@ -95,19 +95,24 @@ def qrotate(R, v):
 
     m = |R|² must be a normal float64: 1e-150 < |R| < 1e150.
     """
-    s = R[0]
-    rx, ry, rz = R[1], R[2], R[3]
+    out = np.empty(3)
+    qrotate_into(R[0], R[1], R[2], R[3], v, out)
+    return out
+
+
+@njit(cache=True, inline="always")
+def qrotate_into(s, rx, ry, rz, v, out):
+    """out = R v R⁻¹ for R = (s, rx, ry, rz), as :func:`qrotate`, without allocating (for numba loops;
+    R⁻¹ v R is (s, −rx, −ry, −rz))."""
     m = s * s + rx * rx + ry * ry + rz * rz
     # u = s v + r × v
     ux = s * v[0] + ry * v[2] - rz * v[1]
     uy = s * v[1] + rz * v[0] - rx * v[2]
     uz = s * v[2] + rx * v[1] - ry * v[0]
     c = 2.0 / m
-    out = np.empty(3)
     out[0] = v[0] + c * (ry * uz - rz * uy)
     out[1] = v[1] + c * (rz * ux - rx * uz)
     out[2] = v[2] + c * (rx * uy - ry * ux)
-    return out
 
 
 @njit(cache=True)

@@ -3,7 +3,8 @@
 For every sample of an :class:`pnrotor.pn.evolve.Evolution` (v, Φ, χ₁, χ₂ and the orbital-frame rotor R
 with n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹):
 
-1. the spins in the co-orbital frame, χᵢ' = R⁻¹ χᵢ R (components along n̂, λ̂, ℓ̂);
+1. the spins in the co-orbital frame, χᵢ' = R⁻¹ χᵢ R (components along n̂, λ̂, ℓ̂), formed per sample
+   inside the amplitude kernel (no temporary arrays);
 2. the co-orbital amplitudes H_ℓm(v, ν, δ, χ₁', χ₂') up to ``amplitude_order`` and ``ell_max``:
    :mod:`pnrotor.waveform.nonspinning` and :mod:`pnrotor.waveform.spin`, each term with its source;
 3. the inertial modes h_ℓm = Σ_m' 𝔇^ℓ_{m m'}(R) H_ℓm' (:mod:`pnrotor.waveform.wigner`; Boyle et al. 2013,
@@ -159,15 +160,14 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
     (Mpc or an astropy length) or, without one, as r h / M.  Returns :class:`Modes`."""
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
     inputs = evolution.inputs
-    chi1 = chi2 = None
-    if inputs["state"] == "precessing":
-        Rinv = q.conjugate(evolution.R)
-        chi1, chi2 = q.rotate(Rinv, evolution.chi1), q.rotate(Rinv, evolution.chi2)
+    chi1 = chi2 = R = None
+    if inputs["state"] == "precessing":   # spins taken into the orbital frame inside the amplitude kernel
+        chi1, chi2, R = evolution.chi1, evolution.chi2, evolution.R
     elif inputs["spin_content"] == "aligned":   # constant spins along ℓ̂
         chi1, chi2 = (np.outer(np.ones(len(evolution)), [0.0, 0.0, np.dot(chi[0], evolution.ell_hat[0])])
                       for chi in (evolution.chi1, evolution.chi2))
     H = coorbital_modes(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
-                        inputs["kappa1"], inputs["kappa2"])
+                        inputs["kappa1"], inputs["kappa2"], R)
     h = _to_inertial(H, evolution, ell_max)
     if distance_Mpc is not None:
         h *= _scale(None, distance_Mpc, inputs["M_seconds"])
