@@ -158,3 +158,32 @@ def test_modes_round_trip_through_hdf5_beside_their_run(tmp_path):
         runs.add("modes", modes(run, ell_max=2))
     assert sorted(hdf5.list_runs(tmp_path / "run_and_modes.h5")) == ["modes", "run"]
     np.testing.assert_array_equal(hdf5.read(tmp_path / "run_and_modes.h5", "modes").data, modes(run, ell_max=2).data)
+
+
+def test_to_sxs_keeps_the_modes_and_their_sum_over_spherical_harmonics():
+    """Modes.to_sxs: sxs.WaveformModes with the same h_ℓm (r h / M, t in M, from strain at a distance too);
+    sxs's own Σ h_ℓm ₋₂Y_ℓm in the direction (ι, φ) is pnrotor's h₊ − i h× for (ι, φ_ref = π/2 − φ)."""
+    sxs = pytest.importorskip("sxs")
+    quaternionic = pytest.importorskip("quaternionic")
+    run = pnrotor.evolve(30, 10, [0.6, 0.0, 0.2], [0.0, -0.4, 0.1], 20.0, sampling=1 / 4096)
+    m = modes(run, ell_max=4)
+    w = m.to_sxs()
+    assert isinstance(w, sxs.WaveformModes) and w.spin_weight == -2 and w.ell_max == 4
+    np.testing.assert_array_equal(w.t, m.t)
+    for ell, mm in m.ell_m:
+        np.testing.assert_array_equal(w.data[:, w.index(ell, mm)], m.mode(ell, mm))
+    far = modes(run, ell_max=4, distance=250.0).to_sxs()
+    np.testing.assert_allclose(far.data, w.data, rtol=1e-13, atol=0)
+    for iota, phi in ((0.7, 0.4), (2.5, 5.0)):
+        h = np.asarray(w.evaluate(quaternionic.array.from_spherical_coordinates(iota, phi)))
+        hp, hc = m.polarizations(iota, phi_ref=np.pi / 2 - phi)
+        assert np.max(np.abs(h - (hp - 1j * hc))) < 1e-14 * np.max(np.abs(hp))
+
+
+def test_to_lal_is_the_interop_series():
+    pytest.importorskip("lalsimulation")
+    import lalsimulation as ls
+    run = pnrotor.evolve(30, 10, [0.6, 0.0, 0.2], [0.0, -0.4, 0.1], 20.0, sampling=1 / 4096)
+    m = modes(run, ell_max=3, distance=100.0)
+    hlms = m.to_lal()
+    np.testing.assert_array_equal(ls.SphHarmTimeSeriesGetMode(hlms, 3, -1).data.data, m.mode(3, -1))

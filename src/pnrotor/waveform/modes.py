@@ -114,6 +114,20 @@ class Modes:
         rotor = q.multiply(q.conjugate(self._frame_rotor(frame)), self._frame_rotor(self.frame))
         return replace(self, data=rotate_modes(self.data, rotor, self.ell_max), frame=frame)
 
+    def to_lal(self):
+        """These modes as LALSuite's ``SphHarmTimeSeries`` (strain; :func:`pnrotor.interop.lal.sph_harm_time_series`,
+        needs lalsuite)."""
+        from pnrotor.interop.lal import sph_harm_time_series
+
+        return sph_harm_time_series(self)
+
+    def to_sxs(self):
+        """These modes as ``sxs.WaveformModes`` (r h / M against t/M; :func:`pnrotor.interop.sxs.waveform_modes`,
+        needs sxs)."""
+        from pnrotor.interop.sxs import waveform_modes
+
+        return waveform_modes(self)
+
     def polarizations(self, inclination, phi_ref=0.0, distance=None, psi=0.0):
         """h₊, h× (N,) seen from the direction (θ, φ) = (ι, π/2 − φ_ref) of the inertial frame — the direction
         LALSuite gives a line of sight with inclination ι and reference phase φ_ref when it builds
