@@ -868,3 +868,21 @@ def test_kind_whose_class_is_not_importable(tmp_path, monkeypatch, evolution_kin
     monkeypatch.setitem(hdf5.KINDS, "EvolutionLike", "pnrotor.no_such_module:Evolution")
     with pytest.raises(ValueError, match="need pnrotor.no_such_module:Evolution, which is not importable"):
         hdf5.read(tmp_path / "pn.h5")
+
+
+def test_a_full_disk_is_found_before_writing(tmp_path, monkeypatch):
+    """Arrays larger than the free space: one OSError (ENOSPC) naming the folder and the sizes, and neither the
+    file nor a temporary one is left; the same for a run added to a batch."""
+    import errno
+    import shutil
+    history = frame_history()
+    free = history.t.nbytes + history.R.nbytes - 1
+    monkeypatch.setattr(shutil, "disk_usage", lambda folder: shutil._ntuple_diskusage(10 ** 9, 10 ** 9 - free, free))
+    with pytest.raises(OSError, match=r"no space for run\.h5 in .*: its arrays need .* MiB are free") as error:
+        hdf5.write(tmp_path / "run.h5", history)
+    assert error.value.errno == errno.ENOSPC
+    with pytest.raises(OSError, match="no space"):
+        with hdf5.batch(tmp_path / "many.h5") as runs:
+            runs.add("a", history)
+    assert list(tmp_path.iterdir()) == []
+    hdf5.write(tmp_path / "small.h5", history, compression="gzip")   # compressed: size unknown, not refused

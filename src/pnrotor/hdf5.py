@@ -37,6 +37,7 @@ becomes a `ValueError` naming the file, never a traceback.
 """
 
 import dataclasses
+import errno
 import importlib
 import numbers
 import os
@@ -182,6 +183,7 @@ def write(path, run, *, overwrite=False, compression=None, checksum=True, group=
             runs.add(group, run)  # checks the run
         return path
     _check_target(path, overwrite)
+    _check_space(path, run, compression)
     with _replacing(path, overwrite) as f:
         _put_run(f, run, compression, checksum)
     return path
@@ -253,6 +255,7 @@ class Batch:
     def add(self, name, run):
         """Write the run dataclass `run` as the run `name`, by the rules of `write` (checked as it checks)."""
         _check_run(run)
+        _check_space(self.path, run, self.compression)
         with self._adding(name) as f:
             _put_run(f.create_group(name), run, self.compression, self.checksum)
 
@@ -479,6 +482,29 @@ def _check_target(path, overwrite):
         raise FileNotFoundError(f"folder {path.parent} does not exist (writing {path}); create it first")
     if path.exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass overwrite=True (--overwrite) to replace it")
+
+
+def _check_space(path, run, compression):
+    """An `OSError` (ENOSPC) naming the folder of `path` and the sizes if the arrays of `run` do not fit in its
+    free space: a full disk found before a byte is written, not in the middle of a large write.  Uncompressed
+    arrays are what the file holds (plus metadata); a compressed file's size is not known before, so it is
+    not checked."""
+    if compression is not None:
+        return
+    need = _array_bytes({field.name: getattr(run, field.name) for field in dataclasses.fields(run)})
+    free = shutil.disk_usage(Path(path).parent).free
+    if need > free:
+        raise OSError(errno.ENOSPC, f"no space for {Path(path).name} in {Path(path).parent}: its arrays need "
+                                    f"{need / 2 ** 20:.1f} MiB, {free / 2 ** 20:.1f} MiB are free")
+
+
+def _array_bytes(value):
+    """Bytes of the numpy arrays in `value` and in the dicts it holds."""
+    if isinstance(value, np.ndarray):
+        return value.nbytes
+    if isinstance(value, dict):
+        return sum(_array_bytes(item) for item in value.values())
+    return 0
 
 
 @contextmanager
