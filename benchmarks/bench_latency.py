@@ -27,7 +27,7 @@ import time
 import numpy as np
 
 from pnrotor.ode import AFTER_STEP_SIG, by_address
-from pnrotor.ode.dop853 import OUT_FINAL, OUT_STEPS, _dop853_core, _entry_point, no_after_step
+from pnrotor.ode.dop853 import _CORE_SIG, OUT_FINAL, OUT_STEPS, _dop853_core, _entry_point, no_after_step
 from pnrotor.pn import evolve, lalsuite_orders
 from pnrotor.pn.evolve import CONTROLLER, Evolution, _stats, build_system, half, integrate_half, termination
 from pnrotor.pn.sampling import sample
@@ -64,7 +64,7 @@ def core_call(s, system, t_eval, dense):
             np.full(n, s.atol), np.full(n, s.rtol), 0.0, np.inf, s.max_steps, np.empty(0),
             OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, directions.size, directions,
             CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
-    core = _entry_point(_dop853_core)
+    core = _entry_point(_dop853_core, _CORE_SIG)
     return lambda: core(*args)
 
 

@@ -572,3 +572,19 @@ def test_compensated_summation_keeps_long_sums_exact():
     r = dop853(constant, 0.0, [1000.0], 1000.0, atol=1e-10, max_step=0.01, t_eval="final")
     assert r.nsteps > 99_999
     assert abs(r.y[-1, 0] - 1100.0) <= np.spacing(1100.0)
+
+
+def test_the_core_has_one_compiled_signature_whatever_the_callers_pass():
+    """The core is compiled for _CORE_SIG only and called through that entry point: a user's dispatcher
+    as rhs adds no overload (one would be cached with a reference to the user's module, which another
+    process could not import: a batch then failed every row with ModuleNotFoundError)."""
+    from pnrotor.ode.dop853 import _CORE_SIG, _dop853_core, _entry_point
+
+    @njit(RHS_SIG)
+    def decay(t, y, p, dydt):
+        dydt[0] = -y[0]
+
+    r = dop853(decay, 0.0, [1.0], 1.0, atol=1e-10)
+    assert abs(r.y[-1, 0] - math.exp(-1.0)) < 1e-9
+    assert _entry_point(_dop853_core, _CORE_SIG) is not _dop853_core
+    assert list(_dop853_core.overloads) == [tuple(_CORE_SIG.args)]

@@ -1,16 +1,26 @@
-"""Whether numba's cache already holds pnrotor's compiled kernels, found without importing numba.
+"""Whether numba's cache already holds pnrotor's compiled kernels, found without importing numba, and
+compiling the biggest of them beside the rest.
 
-pnrotor's kernels are compiled with ``cache=True``: the first run on a machine compiles them (the CLI's
-main job took 33 s cold against ~1.5 s warm on this project's 2-core machine) and numba stores them beside
-the sources in ``__pycache__``, or in ``NUMBA_CACHE_DIR`` when that is set.  :func:`is_cold` looks for the
-index file of the DOP853 core, the kernel every run needs, so that a caller can say what the wait is.
+pnrotor's kernels are compiled with ``cache=True``: the first run on a machine compiles them and numba
+stores them beside the sources in ``__pycache__``, or in ``NUMBA_CACHE_DIR`` when that is set.
+:func:`is_cold` looks for the index file of the DOP853 core, the kernel every run needs, so that a caller
+can say what the wait is.  That core is half of a cold start (7.4 s of 15.8 for the CLI's main job,
+mostly numba's typing), and numba compiles one function at a time in a process: on a cold cache
+:func:`compile_core_aside` compiles it in a second process while this one compiles the rest of its run
+(parameters, right-hand side, events), and the core's first use waits for that process and loads what it
+cached (``pnrotor.ode.dop853._entry_point``).
 """
 
 import glob
 import os
+import subprocess
+import sys
 from importlib.util import find_spec
 
-__all__ = ["is_cold"]
+__all__ = ["is_cold", "compile_core_aside", "wait_for_core_aside"]
+
+_aside = None
+"""The process compiling the DOP853 core, while it may still be running."""
 
 
 def is_cold():
@@ -19,3 +29,22 @@ def is_cold():
     ode = os.path.dirname(find_spec("pnrotor.ode").origin)
     where = os.path.join(folder, "ode_*") if folder else os.path.join(ode, "__pycache__")
     return not glob.glob(os.path.join(where, "dop853._dop853_core-*.nbi"))
+
+
+def compile_core_aside():
+    """Start compiling the DOP853 core into numba's cache in another process (module docstring); it dies
+    with this one.  Nothing is lost if it fails: the core's first use then compiles it here."""
+    global _aside
+    from pnrotor.batch.backends import _die_with_parent
+
+    _aside = subprocess.Popen([sys.executable, "-c", "from pnrotor.ode.dop853 import compile_core; compile_core()"],
+                              stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                              preexec_fn=_die_with_parent)
+
+
+def wait_for_core_aside():
+    """Wait for the process of :func:`compile_core_aside`, if one was started (at most once)."""
+    global _aside
+    if _aside is not None:
+        _aside.wait()
+        _aside = None

@@ -103,12 +103,14 @@ def add_parser(subparsers):
 
 
 def _warn_if_cold():
-    """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent half minute."""
+    """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent wait; the
+    biggest kernel is compiled in a second process meanwhile (`pnrotor.numba_cache.compile_core_aside`)."""
     from pnrotor import numba_cache
 
     if numba_cache.is_cold():
-        print("pnrotor: compiling its numba kernels for this machine, once (~30 s); later runs load them in ~1 s",
-              file=sys.stderr, flush=True)
+        print("pnrotor: compiling its numba kernels for this machine, once (~10-15 s); later runs load them in "
+              "~1 s", file=sys.stderr, flush=True)
+        numba_cache.compile_core_aside()
 
 
 def run(args):

@@ -365,6 +365,6 @@ def bulirsch_stoer(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None,
     k_init = int(-math.log10(tol) * 0.6 + 1.5) - 1
     k_init = min(max(k_init, 1), int(k_max) - 2)
 
-    t_out, y_out, iv, fv = _entry_point(_bs_core)(c.rhs, c.after_step, c.t0, c.y0, c.t_end, c.p, c.atol, c.rtol,
+    t_out, y_out, iv, fv = _entry_point(_bs_core, _BS_SIG)(c.rhs, c.after_step, c.t0, c.y0, c.t_end, c.p, c.atol, c.rtol,
                                                   c.first_step, c.max_step, c.max_steps, c.mode, int(k_max), k_init)
     return _result(t_out, y_out, iv, fv, "Bulirsch-Stoer")

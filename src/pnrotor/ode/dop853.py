@@ -5,8 +5,9 @@ This module owns
 * the function signatures that right-hand sides and hooks must be compiled with (``RHS_SIG``,
   ``AFTER_STEP_SIG``, ``EVENTS_SIG``) and the default no-op hooks;
 * the DOP853 stepper, step-size controller, dense output, event location and driver loop, all in
-  one ``@njit`` function with an explicit signature (:func:`_dop853_core`), so that it is compiled
-  once per machine and loaded from numba's cache afterwards, whatever right-hand side is passed;
+  one ``@njit`` function compiled for one explicit signature (:func:`_dop853_core`, ``_CORE_SIG``) on
+  first use, so that it is compiled once per machine and loaded from numba's cache afterwards, whatever
+  right-hand side is passed;
 * the Python entry point :func:`dop853` (input validation, result assembly).
 
 Algorithms (Hairer, Nørsett & Wanner, *Solving Ordinary Differential Equations I*, 2nd ed.,
@@ -169,17 +170,29 @@ def _default_hook(name):
 _ENTRY_POINTS = {}
 
 
-def _entry_point(core):
-    """The compiled entry point of a core with one explicit signature (or the dispatcher)."""
+def _entry_point(core, sig):
+    """The compiled entry point of a core for its one signature ``sig`` (or the dispatcher), compiled or loaded
+    from numba's cache on first use; a compilation of the core that the CLI started in another process
+    (:func:`pnrotor.numba_cache.compile_core_aside`) is awaited first, so that this one loads it."""
     ep = _ENTRY_POINTS.get(core)
     if ep is None:
+        if not core.overloads:
+            from pnrotor import numba_cache
+
+            numba_cache.wait_for_core_aside()
         try:
-            (cres,) = core.overloads.values()
-            ep = cres.entry_point
+            core.compile(sig)
+            ep = core.overloads[tuple(sig.args)].entry_point
         except Exception:  # pragma: no cover - numba internals changed
             ep = core
         _ENTRY_POINTS[core] = ep
     return ep
+
+
+def compile_core():
+    """Compile the DOP853 core into numba's cache (or load it): what :func:`pnrotor.numba_cache.compile_core_aside`
+    runs in another process."""
+    _entry_point(_dop853_core, _CORE_SIG)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -506,7 +519,7 @@ _CORE_SIG = types.Tuple((_A1, _A2, _A1, _A1, _A3, _I1, _A1, _A1))(
 )
 
 
-@njit(_CORE_SIG, cache=True)
+@njit(cache=True)   # compiled for _CORE_SIG by _entry_point when first needed, not at import
 def _dop853_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_step, max_step,
                  max_steps, t_eval, out_mode, want_dense, n_events, ev_dir, safety, min_factor,
                  max_factor):
@@ -1108,7 +1121,7 @@ def _integrate(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_step
     functions by address or checked dispatchers, contiguous float64 arrays, ``mode`` an ``OUT_*`` code) →
     :class:`OdeResult`.  :func:`pnrotor.pn.evolve.integrate_half` calls it directly with inputs its settings
     stage has checked, which saves the 20–40 µs of :func:`dop853`'s validation per half (measured)."""
-    t_out, y_out, seg_t, seg_h, seg_c, iv, fv, y_ev = _entry_point(_dop853_core)(
+    t_out, y_out, seg_t, seg_h, seg_c, iv, fv, y_ev = _entry_point(_dop853_core, _CORE_SIG)(
         rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps, t_eval, mode,
         dense, n_events, ev_dir, safety, min_factor, max_factor)
     nseg = int(iv[IV_NSEG])

@@ -19,7 +19,7 @@ It is exact at both ends (θ = 0 gives y₀, θ = 1 gives y₁ up to one roundin
 """
 
 import numpy as np
-from numba import njit, types
+from numba import njit
 
 # --------------------------------------------------------------------------------------------------
 # status codes
@@ -139,11 +139,7 @@ def contd8(rc, theta, out):
             rc[4, i] + theta * (rc[5, i] + th1 * (rc[6, i] + theta * rc[7, i]))))))
 
 
-_DENSE_EVAL_SIG = types.void(types.float64[::1], types.float64[::1], types.float64[:, :, ::1],
-                             types.float64, types.float64[::1], types.float64[:, ::1])
-
-
-@njit(_DENSE_EVAL_SIG, cache=True)
+@njit(cache=True)   # compiled on first use (at import it cost every process 0.3 s on a cold cache)
 def _dense_eval(seg_t, seg_h, coef, direction, tq, out):
     """Evaluate the piecewise interpolant at the times ``tq`` into the rows of ``out``.
 

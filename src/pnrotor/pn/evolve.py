@@ -49,7 +49,7 @@ from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STAT
                           STATUS_SUCCESS)
 from . import initial as _ini
 from . import system as _sys
-from .sampling import sample
+from .sampling import compile_output_kernel, sample
 from .series import basis_values, kmax_from_orders
 from .settings import normalize_approximant, settings
 
@@ -338,6 +338,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
                  precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
                  precession=precession, max_steps=max_steps)
     system = build_system(s)
+    compile_output_kernel(s)
     inputs = s.inputs()
     dense = s.sampling in ("dt", "per_orbit")
     t_eval = "final" if s.sampling == "final" else None
