@@ -4,6 +4,7 @@ ValueError naming what is wrong, and nothing is written before the batch is comp
 
 import os
 
+import numpy as np
 import pytest
 from test_cli_evolve import assert_same_run
 
@@ -217,3 +218,42 @@ def test_dask_cluster_without_workers_fails_after_the_stated_timeout(table, tmp_
         with pytest.raises(ValueError, match=r"has no workers \(waited 1s\)"):
             batch.run(table, tmp_path / "out.h5", scheduler=cluster.scheduler_address)
     assert os.listdir(tmp_path) == ["binaries.csv"]
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_modes_beside_each_run_and_kept_by_resume(table, tmp_path, monkeypatch, jobs):
+    """modes=(ℓ_max, amplitude order, distance): each row's Modes as NAME.modes, equal to pnrotor.modes of
+    the single evolve call; a resumed batch keeps those already computed, and its fingerprint includes the
+    modes asked for."""
+    out = tmp_path / "out.h5"
+    outcome = batch.run(table, out, jobs=jobs, modes=(4, 1.5, 100.0))
+    assert outcome.written == 3
+    assert sorted(hdf5.list_runs(out)) == ["a", "a.modes", "b", "b.modes", "c", "c.modes"]
+    for name, kw in zip("abc", ROWS):
+        expected = pnrotor.modes(pnrotor.evolve(**kw), 4, 1.5, 100.0)
+        got = hdf5.read(out, f"{name}.modes")
+        np.testing.assert_array_equal(got.data, expected.data)
+        assert got.distance_Mpc == 100.0
+    real, calls = batch.backends.evolve_row, []
+
+    def interrupt_third(params):
+        calls.append(params)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(params)
+
+    monkeypatch.setattr(batch.backends, "evolve_row", interrupt_third)
+    with pytest.raises(KeyboardInterrupt):
+        batch.run(table, tmp_path / "again.h5", jobs=1, modes=(4, 1.5, 100.0))
+    with pytest.raises(ValueError, match="holds runs of another table"):
+        batch.run(table, tmp_path / "again.h5", jobs=1, resume=True, modes=(3, 1.5, 100.0))
+    monkeypatch.setattr(batch.backends, "evolve_row", real)
+    batch.run(table, tmp_path / "again.h5", jobs=1, resume=True, modes=(4, 1.5, 100.0))
+    for name in ("a", "a.modes", "c.modes"):
+        assert_same_file_run(hdf5.read(tmp_path / "again.h5", name), hdf5.read(out, name))
+
+
+def assert_same_file_run(a, b):
+    for field in ("t", "data", "v", "R"):
+        if hasattr(a, field):
+            np.testing.assert_array_equal(getattr(a, field), getattr(b, field))

@@ -522,10 +522,18 @@ def test_bad_modes_options_exit_2_before_running(extra, message, in_tmp, capsys,
     assert code == 2 and message in err and os.listdir(in_tmp) == []
 
 
-def test_modes_with_batch_is_refused(in_tmp, capsys):
-    write_text(in_tmp / "p.csv", "m1,m2,chi1,chi2,f_ref\n30,10,\"0,0,0\",\"0,0,0\",100\n")
-    code, _, err = evolve(capsys, "--batch", "p.csv", "--modes")
-    assert code == 2 and "--modes applies to single runs only" in err
+def test_modes_with_batch_are_stored_beside_each_run(in_tmp, capsys):
+    """--batch --modes: the groups NAME and NAME.modes of each row; bad modes options exit 2 before running."""
+    write_text(in_tmp / "p.csv", "m1,m2,chi1,chi2,f_ref,name\n30,10,\"0.3,0,0.2\",\"0,0,0\",100,x\n")
+    code, out, _ = evolve(capsys, "--batch", "p.csv", "--modes", "--ell-max", "3", "--amplitude-order", "1",
+                          "-o", "p.h5")
+    assert code == 0 and "with their modes" in out
+    assert sorted(hdf5.list_runs(in_tmp / "p.h5")) == ["x", "x.modes"]
+    h = hdf5.read(in_tmp / "p.h5", "x.modes")
+    assert h.ell_max == 3 and h.inputs["amplitude_order"] == 1.0
+    np.testing.assert_array_equal(h.data, pnrotor.modes(hdf5.read(in_tmp / "p.h5", "x"), 3, 1.0).data)
+    code, _, err = evolve(capsys, "--batch", "p.csv", "--modes", "--ell-max", "9", "-o", "q.h5")
+    assert code == 2 and "ell_max must be an integer from 2 to 8" in err and not (in_tmp / "q.h5").exists()
 
 
 def test_full_disk_is_one_line_and_leaves_no_file(in_tmp, capsys, monkeypatch):

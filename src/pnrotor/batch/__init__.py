@@ -61,10 +61,12 @@ class Plan:
     storage: dict = field(default_factory=dict)
     create_folder: bool = False
     resume: bool = False
+    modes: tuple = None
 
     @property
     def tasks(self):
-        return [(i, row.params) for i, row in enumerate(self.rows) if row.error is None]
+        extra = {} if self.modes is None else {"modes": self.modes}
+        return [(i, {**row.params, **extra}) for i, row in enumerate(self.rows) if row.error is None]
 
     @property
     def where(self):
@@ -126,13 +128,17 @@ class Plan:
             with _InterruptFlag().deferred(), hdf5.batch(self.path, overwrite=self.overwrite, **self.storage) as out:
                 for index in sorted(done):
                     out.copy_from(done[index].path, done[index].group, self.rows[index].name)
+                    if self.modes is not None:
+                        out.copy_from(done[index].path, done[index].group + backends.MODES_SUFFIX,
+                                      self.rows[index].name + backends.MODES_SUFFIX)
         if self.parts.exists():
             shutil.rmtree(self.parts)
         return len(done)
 
     def _fingerprint(self):
-        """What identifies the table: every row's name and parameters."""
+        """What identifies the table: every row's name and parameters, and the modes asked for."""
         text = "\n".join(f"{row.name}\t{sorted(row.params.items())!r}" for row in self.rows if row.error is None)
+        text += f"\nmodes {self.modes!r}" if self.modes is not None else ""
         return hashlib.sha256(text.encode()).hexdigest() + "\n"
 
     def _stored(self):
@@ -166,7 +172,7 @@ _TABLE = "table.sha256"
 
 
 def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compression=None, checksum=True,
-         defaults=None, create_folder=False, resume=False):
+         defaults=None, create_folder=False, resume=False, modes=None):
     """Check a batch before it runs → :class:`Plan`.
 
     ``table``: a CSV or TOML batch file (read with :func:`~pnrotor.batch.table.read_batch`; ``defaults``
@@ -175,7 +181,9 @@ def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compressi
     (not its parents) with ``create_folder`` if there is a run to write.  ``jobs`` local worker processes
     (default: every core; 1 runs in this process) or a Dask ``scheduler`` address; ``compression`` and
     ``checksum`` as in `pnrotor.hdf5.batch`; ``resume`` completes an interrupted batch from the runs kept in
-    ``OUTPUT.parts`` (module docstring), which without it is an error."""
+    ``OUTPUT.parts`` (module docstring), which without it is an error.  ``modes`` = (ell_max, amplitude_order,
+    distance) (`pnrotor.modes`' arguments, distance None for r h / M) also computes each row's modes and stores
+    them beside its run as the group ``NAME.modes``."""
     if jobs is not None and scheduler is not None:
         raise ValueError("jobs applies to local runs; a Dask cluster (scheduler) sets its own parallelism")
     jobs = (os.cpu_count() or 1) if jobs is None else jobs
@@ -187,8 +195,17 @@ def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compressi
         raise IsADirectoryError(f"{path} is a folder; give a file name for the batch")
     if path.exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
+    wave = None
+    if modes is not None:
+        from pnrotor.waveform.modes import check_arguments
+
+        wave = check_arguments(*modes)
+        clash = [row.name for row in rows if row.name.endswith(backends.MODES_SUFFIX)]
+        if clash:
+            raise ValueError(f"with modes, run names may not end in {backends.MODES_SUFFIX!r} (the modes' groups "
+                             f"do): {', '.join(clash)}")
     result = Plan(rows, path, jobs, scheduler, overwrite, dict(compression=compression, checksum=checksum),
-                  create_folder, bool(resume))
+                  create_folder, bool(resume), wave)
     if result.parts.exists() and not resume:
         raise FileExistsError(f"{result.parts} holds the finished runs of an interrupted batch: pass --resume "
                               "(resume=True) to complete it, or remove the folder")

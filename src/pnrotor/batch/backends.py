@@ -19,14 +19,24 @@ SCHEDULER_TIMEOUT = "10s"
 
 
 def evolve_row(params):
-    """`pnrotor.evolve` on one row's keywords (the numba code is imported on the first call)."""
+    """`pnrotor.evolve` on one row's keywords (the numba code is imported on the first call); with the key
+    ``modes`` = (ell_max, 2 × amplitude_order, distance in Mpc or None), the pair (Evolution, its `Modes`)."""
     from pnrotor.pn.evolve import evolve
 
-    return evolve(**params)
+    params = dict(params)
+    wave = params.pop("modes", None)
+    run = evolve(**params)
+    if wave is None:
+        return run
+    from pnrotor.waveform.modes import modes
+
+    ell_max, order2, distance = wave
+    return run, modes(run, ell_max, order2 / 2, distance)
 
 
 def attempt(params):
-    """evolve(**params) → (True, Evolution) or (False, message): one row's failure must not stop the batch."""
+    """evolve_row(params) → (True, Evolution or (Evolution, Modes)) or (False, message): one row's failure must
+    not stop the batch."""
     try:
         return True, evolve_row(params)
     except Exception as error:  # noqa: BLE001 - reported per row
@@ -45,21 +55,28 @@ class Stored:
         self.path, self.group, self.brief = path, group, brief
 
 
+MODES_SUFFIX = ".modes"
+"""A row's modes are stored beside its run as the group ``NAME.modes``."""
+
+
 def brief(run):
     """What the batch summary needs of a run: small enough to send back from a worker instead of the run."""
     return {"span": run.span(), "M_seconds": run.inputs["M_seconds"], "termination": run.termination,
             "samples": len(run), "nfev": run.stats["nfev"], "wall_time_s": run.stats["wall_time_s"]}
 
 
-def store(run, folder, index, storage):
-    """Write one finished run into its own part file ``run-INDEX.h5`` (group INDEX) in `folder` → `Stored`;
-    atomic but not fsynced: it survives the process (kill -9 included), not a power loss (fsyncs made 200
-    runs at 1/4096 s with --jobs 2 take ~20% longer)."""
+def store(result, folder, index, storage):
+    """Write one finished row (an Evolution, or (Evolution, Modes)) into its own part file ``run-INDEX.h5``
+    (groups INDEX and INDEX.modes) in `folder` → `Stored`; atomic but not fsynced: it survives the process
+    (kill -9 included), not a power loss (fsyncs made 200 runs at 1/4096 s with --jobs 2 take ~20% longer)."""
     from pnrotor import hdf5
 
+    run, *waves = result if isinstance(result, tuple) else (result,)
     path = Path(folder) / f"run-{index}.h5"
     with hdf5.batch(path, overwrite=True, durable=False, **storage) as part:
         part.add(str(index), run)
+        for wave in waves:
+            part.add(str(index) + MODES_SUFFIX, wave)
     return Stored(path, str(index), brief(run))
 
 

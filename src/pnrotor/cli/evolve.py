@@ -79,11 +79,11 @@ def add_parser(subparsers):
                         help="no Fletcher-32 checksums, for scratch files (faster writes; damaged bytes then read "
                         "back as wrong numbers); by default each chunk has one, so damage is an error on reading")
     output.add_argument("--checksum", action="store_true", default=True, help="the default; kept for old scripts")
-    waves = parser.add_argument_group("waveform modes (one run)")
+    waves = parser.add_argument_group("waveform modes")
     waves.add_argument("--modes", action="store_true",
                        help="also compute the modes h_lm (pnrotor.modes) and write the file with two groups, "
-                       "run and modes; for a waveform sample finely (--sampling 1/4096 or per_orbit:16): the "
-                       "default steps are far apart")
+                       "run and modes (with --batch: NAME and NAME.modes per row); for a waveform sample finely "
+                       "(--sampling 1/4096 or per_orbit:16): the default steps are far apart")
     waves.add_argument("--ell-max", type=int, default=8, metavar="L", help="modes l = 2 ... L, L <= 8 (default 8)")
     waves.add_argument("--amplitude-order", type=float, default=3.5, metavar="A",
                        help="PN amplitude order 0, 0.5, ..., 3.5 (default 3.5)")
@@ -117,8 +117,6 @@ def run(args):
     if args.resume and args.batch is None:
         raise UsageError("--resume applies to --batch runs only")
     if args.batch is not None:
-        if args.modes:
-            raise UsageError("--modes applies to single runs only (not yet to --batch)")
         return _run_batch(args)
     for option in ("jobs", "scheduler"):
         if getattr(args, option) is not None:
@@ -254,11 +252,13 @@ def _run_batch(args):
     path, default_folder = _output_path(args, Path(args.batch).stem)
     plan = batch.plan(rows, path, jobs=args.jobs, scheduler=args.scheduler, overwrite=args.overwrite,
                       compression=args.compression, checksum=args.checksum, create_folder=default_folder,
-                      resume=args.resume)
+                      resume=args.resume,
+                      modes=(args.ell_max, args.amplitude_order, args.distance) if args.modes else None)
     if not args.quiet:
         bad = len(plan.rows) - len(plan.tasks)
         print(f"pnrotor evolve --batch {args.batch}: {len(plan.rows)} binaries"
-              + (f" ({bad} with bad values)" if bad else "") + f", on {plan.where}")
+              + (f" ({bad} with bad values)" if bad else "") + f", on {plan.where}"
+              + ("; with their modes (groups NAME and NAME.modes)" if args.modes else ""))
     _warn_if_cold()
     outcome = plan.run(progress=not args.quiet and sys.stderr.isatty())
     if not args.quiet:
