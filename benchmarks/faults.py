@@ -1,4 +1,5 @@
-"""Fault injection (issue 15): batches and single runs stopped by signals at random moments.
+"""Fault injection (issue 15): batches and single runs stopped by signals at random moments, damaged files,
+full disks, racing writers and lost Dask workers.
 
 * batches: ``pnrotor evolve --batch`` of ``--rows`` binaries, killed with SIGKILL, SIGTERM or SIGINT at a
   random moment, then completed with ``--resume``: how many finished runs the kill kept (one part file each), whether
@@ -9,10 +10,15 @@
   (sampled at its steps and at 1/4096 s) written by `pnrotor.hdf5.write` with its default checksums and with
   ``checksum=False``, each read back with `pnrotor.hdf5.read`: caught (a ValueError naming the file), read
   back identical (the flip hit unused bytes), silently wrong (read without error, a value changed) or a
-  traceback (any other exception).
+  traceback (any other exception);
+* disk full: the CLI writing to a 4 MiB tmpfs a ~30 MB run, uncompressed and gzipped (refused before writing),
+  and a 1.4 MB run when the disk fills during the write: exit code, lines on stderr, traceback, files left;
+* races: ``--races`` pairs of processes writing the same new file at the same instant: both succeeded;
+* Dask: a batch on a local cluster whose worker processes are all killed (SIGKILL) at a random moment:
+  whether it finishes and equals an uninterrupted batch.
 
-    python benchmarks/faults.py [--trials 5] [--rows 40] [--jobs 2] [--seed 1] [--flips 500]
-                                [--sections batches,single,flips]
+    python benchmarks/faults.py [--trials 5] [--rows 40] [--jobs 2] [--seed 1] [--flips 500] [--races 300]
+                                [--sections batches,single,flips,disk,races,dask]
 """
 
 import argparse
@@ -185,6 +191,122 @@ def flips(folder, args, rng):
                   f"{counts['identical']:9d} {counts['wrong']:14d} {counts['traceback']:10d}")
 
 
+BNS = ["--m1", "1.4", "--m2", "1.3", "--chi1", "0,0,0", "--chi2", "0,0,0", "--f-ref", "30", "--sampling", "1/4096"]
+"""A run of ~30 MB at 1/4096 s (~20 MB gzipped)."""
+
+
+def disk(folder, args, rng):
+    """The CLI writing to a 4 MiB tmpfs (mounting one needs root): refused before writing, or failing while
+    writing; the goal is one line, exit 1, nothing left."""
+    small = folder / "small"
+    small.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", str(small)], capture_output=True).returncode:
+        print("\ndisk full: skipped (cannot mount a tmpfs here)")
+        return
+    import shutil
+
+    import pnrotor
+
+    small_run = ["--m1", "30", "--m2", "10", "--chi1", "0.6,0,0.2", "--chi2", "0,-0.4,0.1", "--f-ref", "20",
+                 "--sampling", "1/4096"]
+    run = pnrotor.evolve(30, 10, (0.6, 0, 0.2), (0, -0.4, 0.1), 20.0, sampling=1 / 4096)
+    raw = sum(getattr(run, k).nbytes for k in ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat"))
+    cases = [("30 MB, uncompressed", BNS, [], False), ("30 MB, gzip", BNS, ["--compression", "gzip"], False),
+             ("1.4 MB, fills while written", small_run, [], True),
+             ("the same, --no-checksum", small_run, ["--no-checksum"], True)]
+    try:
+        print("\ndisk full: runs written to a 4 MiB tmpfs (\"fills while written\": 4 kB more free than the arrays, "
+              "so the check before writing passes and the file's metadata does not fit)")
+        print(f"{'write':<28} {'exit':>4} {'stderr lines':>12} {'traceback':>9} {'files left':>10}  message")
+        for label, binary, extra, fill in cases:
+            if fill:
+                (small / "filler").write_bytes(bytes(shutil.disk_usage(small).free - raw - 4096))
+            done = subprocess.run([sys.executable, "-m", "pnrotor", "evolve", *binary, *extra, "-o", small / "run.h5",
+                                   "-q"], capture_output=True, text=True)
+            err = done.stderr.strip().splitlines()
+            left = [p for p in os.listdir(small) if p != "filler"]
+            print(f"{label:<28} {done.returncode:4d} {len(err):12d} {'Traceback' in done.stderr!s:>9} "
+                  f"{len(left):10d}  {err[-1][23:110] if err else ''}")
+            for name in os.listdir(small):
+                os.remove(small / name)
+    finally:
+        subprocess.run(["umount", str(small)], check=True)
+
+
+def _race_writer(path_queue, results, barrier):
+    import pnrotor
+    from pnrotor import hdf5
+
+    run = pnrotor.evolve(30.0, 10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 100.0)
+    while (path := path_queue.get()) is not None:
+        barrier.wait()
+        try:
+            hdf5.write(path, run)
+            results.put(True)
+        except FileExistsError:
+            results.put(False)
+
+
+def races(folder, args, rng):
+    """Two processes write the same new file at the same instant, ``--races`` times (no overwrite): how often
+    both report success (one would silently replace the other)."""
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    paths, results, barrier = context.Queue(), context.Queue(), context.Barrier(2)
+    writers = [context.Process(target=_race_writer, args=(paths, results, barrier)) for _ in range(2)]
+    for writer in writers:
+        writer.start()
+    both = none = 0
+    for i in range(args.races):
+        for _ in writers:
+            paths.put(folder / f"race{i}.h5")
+        succeeded = results.get() + results.get()
+        both += succeeded == 2
+        none += succeeded == 0
+    for _ in writers:
+        paths.put(None)
+    for writer in writers:
+        writer.join()
+    left = len([p for p in folder.iterdir() if p.name.endswith(".pnrotor-tmp")])
+    print(f"\nracing writers: {args.races} pairs writing the same new file: both succeeded {both}, neither "
+          f"{none}, temporaries left {left}")
+
+
+def dask(folder, args, rng):
+    """A batch on a local Dask cluster (2 workers, each under a nanny) whose worker processes are killed with
+    SIGKILL in the middle: does the batch finish, equal to an uninterrupted one?"""
+    try:
+        from distributed import LocalCluster
+    except ImportError:
+        print("\nDask: skipped (no distributed)")
+        return
+    from pnrotor import batch
+
+    csv = folder / "dask.csv"
+    table(csv, args.rows)
+    reference = folder / "dask-reference.h5"
+    batch.run(csv, reference, jobs=1)
+    print(f"\nDask, {args.rows} rows, 2 workers, every worker process killed once at a random moment")
+    print(f"{'trial':>5} {'written':>7} {'failed':>6} {'equal':>5} {'seconds':>7}")
+    for trial in range(args.trials):
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+            import threading
+
+            pids = [w.process.pid for w in cluster.workers.values()]
+            pids = [child for pid in pids for child in children(pid)]   # the worker processes under the nannies
+            delay = rng.uniform(0.5, 2.0)
+            killer = threading.Timer(delay, lambda: [os.kill(pid, signal.SIGKILL) for pid in pids])
+            out = folder / f"dask-{trial}.h5"
+            start = time.perf_counter()
+            killer.start()
+            outcome = batch.run(csv, out, scheduler=cluster.scheduler_address)
+            killer.join()
+            seconds = time.perf_counter() - start
+            equal = out.exists() and same_file(out, reference)
+            print(f"{trial:5d} {outcome.written:7d} {len(outcome.failed):6d} {equal!s:>5} {seconds:7.1f}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--trials", type=int, default=5)
@@ -192,10 +314,13 @@ def main():
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--flips", type=int, default=500, help="bit flips per file in the flips section")
-    parser.add_argument("--sections", default="batches,single,flips", help="comma-separated sections to run")
+    parser.add_argument("--races", type=int, default=300, help="racing writer pairs in the races section")
+    parser.add_argument("--sections", default="batches,single,flips,disk,races,dask",
+                        help="comma-separated sections to run")
     args = parser.parse_args()
     rng = random.Random(args.seed)
-    sections = {"batches": batches, "single": single_runs, "flips": flips}
+    sections = {"batches": batches, "single": single_runs, "flips": flips, "disk": disk, "races": races,
+                "dask": dask}
     chosen = args.sections.split(",")
     if not set(chosen) <= sections.keys():
         parser.error(f"--sections takes a comma-separated list of {', '.join(sections)}")

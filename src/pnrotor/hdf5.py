@@ -486,16 +486,15 @@ def _check_target(path, overwrite):
 
 def _check_space(path, run, compression):
     """An `OSError` (ENOSPC) naming the folder of `path` and the sizes if the arrays of `run` do not fit in its
-    free space: a full disk found before a byte is written, not in the middle of a large write.  Uncompressed
-    arrays are what the file holds (plus metadata); a compressed file's size is not known before, so it is
-    not checked."""
-    if compression is not None:
-        return
+    free space: a full disk found before a byte is written, not in the middle of a large write, where HDF5
+    fails badly (a compressed write to a full tmpfs crashed the process with SIGSEGV after its error).  The
+    uncompressed size is what the file holds (plus metadata), and an upper bound of a compressed file's."""
     need = _array_bytes({field.name: getattr(run, field.name) for field in dataclasses.fields(run)})
     free = shutil.disk_usage(Path(path).parent).free
     if need > free:
         raise OSError(errno.ENOSPC, f"no space for {Path(path).name} in {Path(path).parent}: its arrays need "
-                                    f"{need / 2 ** 20:.1f} MiB, {free / 2 ** 20:.1f} MiB are free")
+                                    f"{need / 2 ** 20:.1f} MiB{' before compression' * bool(compression)}, "
+                                    f"{free / 2 ** 20:.1f} MiB are free")
 
 
 def _array_bytes(value):
@@ -528,6 +527,12 @@ def _replacing(path, overwrite, copy=False, durable=True):
                     _WRITEBACKS[f.filename] = writeback
                 try:
                     yield f
+                except BaseException:
+                    # the space the failed write took is freed before HDF5 closes the file: on a full disk
+                    # its closing flush failed again and again and crashed the process (SIGSEGV, 66 lines
+                    # of ignored exceptions, the temporary file left; benchmarks/faults.py --sections disk)
+                    os.truncate(temporary, 0)
+                    raise
                 finally:
                     _WRITEBACKS.pop(f.filename, None)
             if writeback:
@@ -535,10 +540,13 @@ def _replacing(path, overwrite, copy=False, durable=True):
                 _fsync(temporary)
             interrupts.check()
             _publish(temporary, path, overwrite)
-    except BaseException:
+    except BaseException as error:
         if writeback:
             writeback.join()
         temporary.unlink(missing_ok=True)
+        if "errno = 28" in str(error):   # HDF5's report of a full disk (a RuntimeError or OSError of many lines)
+            raise OSError(errno.ENOSPC, f"no space left on the device of {path.parent} while writing {path.name}") \
+                from None
         raise
     if durable:
         _fsync(path.parent)
@@ -715,6 +723,8 @@ def _dataset(g, name, array, compression, checksum):
             if compression == "gzip":
                 options["compression_opts"] = _GZIP_LEVEL
     dataset = g.create_dataset(name, data=array, **options)
+    if "chunks" in options:   # HDF5 keeps the last chunks in its cache: written now, a full disk raises here
+        dataset.flush()       # rather than in the dataset's deallocation, where h5py can only print it
     if array.nbytes >= _WRITEBACK_BYTES and g.file.filename in _WRITEBACKS:
         _WRITEBACKS[g.file.filename].start()
     return dataset
