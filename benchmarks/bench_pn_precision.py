@@ -54,7 +54,7 @@ Then (a) per case, the loosest pnrotor atol whose frame error is ≤ LAL's and t
 cost relative to 1e-12.
 
     python benchmarks/bench_pn_precision.py [--rounds 7] [--quick] [--cases …] [--no-scipy] [--no-lal]
-                                            [--json out.json]
+                                            [--json out.json] [--figure diagram.png]
 """
 
 import argparse
@@ -389,6 +389,8 @@ def main():
     ap.add_argument("--no-scipy", action="store_true")
     ap.add_argument("--no-lal", action="store_true")
     ap.add_argument("--json", default=None)
+    ap.add_argument("--figure", default=None, help="also draw the diagram (frame error against wall time, one panel "
+                    "per case) into this image file; needs matplotlib (pnrotor[plot])")
     args = ap.parse_args()
     rounds = args.rounds if args.rounds is not None else (3 if args.quick else 7)
     atols = ATOLS_QUICK if args.quick else ATOLS
@@ -514,6 +516,32 @@ def main():
                    recommended_atol=good[0] if good else None)
         with open(args.json, "w") as fh:
             json.dump(out, fh, indent=1, default=float)
+    if args.figure:
+        figure(results, args.cases, args.figure)
+
+
+def figure(results, cases, path):
+    """The work–precision diagram: per case, frame error against median wall time, a line per method through
+    its tolerances."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.8), squeeze=False)
+    for ax, name in zip(axes[0], cases):
+        rows = [r for r in results[name]["rows"] if "error" not in r and "ms" in r]
+        for method in dict.fromkeys(r["method"] for r in rows):
+            mine = sorted((r for r in rows if r["method"] == method), key=lambda r: -(r["tol"] or 0.0))  # by atol
+            ax.loglog([r["ms"] for r in mine], [r["frame"] for r in mine], "o" if len(mine) == 1 else "o-",
+                      label=method, ms=4)
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel("wall time (ms)")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0][0].set_ylabel("frame error (rad)")
+    axes[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":
