@@ -18,7 +18,7 @@ import math
 import numpy as np
 import pytest
 
-from pnrotor.waveform.layout import mode_index, n_modes
+from pnrotor.waveform.layout import mode_index
 from pnrotor.waveform.amplitudes import coorbital_modes
 from pnrotor.waveform.spin import terms
 
