@@ -76,6 +76,8 @@ def test_invalid_binaries_are_reported_not_raised():
     table[2][1] = [0.9, 0.9, 0.0]         # |χ₁| > 1
     m1 = table[0].copy()
     m1[4] = -3.0                           # negative mass
+    first = evolve_many([-1.0, 30.0], [10.0, 10.0], [0, 0, 0], [0, 0, 0], 20.0)   # the first one too
+    assert list(first.termination) == ["invalid", "energy_balance"] and "m1" in first.message[0]
     pop = evolve_many(m1, *table[1:4], [20.0, 20.0, 20.0, 20.0, 20.0, 5000.0], ell_hat=table[4], n_hat=table[5])
     assert list(pop.termination[[1, 4, 5]]) == ["invalid"] * 3
     assert "chi1" in pop.message[1] and "m1" in pop.message[4] and "f_ref" in pop.message[5]

@@ -145,9 +145,11 @@ integrate_rotor, precession, max_steps
                   spin_spin_order=spin_spin_order, atol=atol, rtol=rtol, sampling="final", rotor=rotor,
                   precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
                   precession=precession, max_steps=max_steps)
-    # the shared options fail for every binary alike: check them once, on the first binary's own inputs
-    approximant = settings(m1a[0], m2a[0], c1[0], c2[0], fref[0], f_min=None, f_max=None, ell_hat=ell[0], n_hat=nh[0],
-             kappa1=k1[0], kappa2=k2[0], **shared).approximant
+    # the shared options fail for every binary alike: check them once, with a reference binary (a binary of the
+    # table could itself be invalid, which must not raise)
+    approximant = settings(10.0, 10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 20.0, f_min=None, f_max=None,
+                           ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0,
+                           **shared).approximant
 
     out = Population(t=np.full(n, np.nan), t_seconds=np.full(n, np.nan), v=np.full(n, np.nan),
                      Phi=np.full(n, np.nan), chi1=np.full((n, 3), np.nan), chi2=np.full((n, 3), np.nan),
