@@ -102,15 +102,17 @@ def add_parser(subparsers):
     parser.set_defaults(func=run)
 
 
-def _warn_if_cold():
-    """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent wait; the
-    biggest kernel is compiled in a second process meanwhile (`pnrotor.numba_cache.compile_core_aside`)."""
+def _warn_if_cold(here=True):
+    """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent wait; if
+    this process runs the evolutions (``here``), the biggest kernel is compiled in a second process meanwhile
+    (`pnrotor.numba_cache.compile_core_aside`; worker processes compile their own)."""
     from pnrotor import numba_cache
 
     if numba_cache.is_cold():
         print("pnrotor: compiling its numba kernels for this machine, once (~10-15 s); later runs load them in "
               "~1 s", file=sys.stderr, flush=True)
-        numba_cache.compile_core_aside()
+        if here:
+            numba_cache.compile_core_aside()
 
 
 def run(args):
@@ -259,7 +261,7 @@ def _run_batch(args):
         print(f"pnrotor evolve --batch {args.batch}: {len(plan.rows)} binaries"
               + (f" ({bad} with bad values)" if bad else "") + f", on {plan.where}"
               + ("; with their modes (groups NAME and NAME.modes)" if args.modes else ""))
-    _warn_if_cold()
+    _warn_if_cold(here=plan.where == "this process")
     outcome = plan.run(progress=not args.quiet and sys.stderr.isatty())
     if not args.quiet:
         print("\n".join(_batch_line(plan.rows[i], outcome.briefs[i]) for i in sorted(outcome.briefs)))
