@@ -247,8 +247,10 @@ def test_modes_beside_each_run_and_kept_by_resume(table, tmp_path, monkeypatch, 
         batch.run(table, tmp_path / "again.h5", jobs=1, modes=(4, 1.5, 100.0))
     with pytest.raises(ValueError, match="holds runs of another table"):
         batch.run(table, tmp_path / "again.h5", jobs=1, resume=True, modes=(3, 1.5, 100.0))
-    monkeypatch.setattr(batch.backends, "evolve_row", real)
+    resumed = []
+    monkeypatch.setattr(batch.backends, "evolve_row", lambda params: resumed.append(params) or real(params))
     batch.run(table, tmp_path / "again.h5", jobs=1, resume=True, modes=(4, 1.5, 100.0))
+    assert sorted(p["m1"] for p in resumed) == [-5.0, 12.0]   # only rows bad (failed, not kept) and c again
     for name in ("a", "a.modes", "c.modes"):
         assert_same_file_run(hdf5.read(tmp_path / "again.h5", name), hdf5.read(out, name))
 

@@ -112,3 +112,19 @@ def test_results_do_not_depend_on_the_number_of_threads():
 def test_bad_shapes_and_shared_options_raise(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_evolve_many_calls_the_one_compiled_core(tmp_path):
+    """In a fresh process with an empty numba cache (so that the parallel loop is compiled, ~15 s), evolve_many
+    leaves the DOP853 core with its one signature: written as constants in the loop, the output mode and
+    dense flag made numba compile (and cache) a second core."""
+    import os
+    import subprocess
+    import sys
+    code = ("from pnrotor.pn import evolve_many\n"
+            "from pnrotor.ode.dop853 import _dop853_core, _CORE_SIG\n"
+            "evolve_many([30.0], [10.0], [0.6, 0, 0.2], [0, 0, 0.1], 20.0)\n"
+            "print(list(_dop853_core.overloads) == [tuple(_CORE_SIG.args)])\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
+                          env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path)))
+    assert done.stdout.strip() == "True", done.stderr[-2000:]

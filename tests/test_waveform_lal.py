@@ -122,5 +122,7 @@ def test_lal_series_need_strain_and_uniform_samples():
     run = evolve(*ALL_CASES["q3-precessing"], sampling=DT)
     with pytest.raises(ValueError, match="distance"):
         sph_harm_time_series(modes(run, ell_max=2))
+    with pytest.raises(ValueError, match="distance"):
+        polarization_series(modes(run, ell_max=2), 0.5)
     with pytest.raises(ValueError, match="uniform samples"):
         sph_harm_time_series(modes(evolve(*ALL_CASES["q3-precessing"]), ell_max=2, distance=DISTANCE_MPC))

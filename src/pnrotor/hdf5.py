@@ -636,7 +636,7 @@ class _Writeback:
             pass
 
 
-def _put_run(g, run, compression, checksum=False):
+def _put_run(g, run, compression, checksum):
     """Store the run dataclass `run` in group `g`: its metadata attributes, its fields, then the CRC of its
     strings."""
     kind = _kind_of(run)

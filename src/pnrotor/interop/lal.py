@@ -87,6 +87,8 @@ def sph_harm_time_series(modes):
 def polarization_series(modes, inclination, phi_ref=0.0, distance=None, psi=0.0):
     """h₊, h× of :meth:`pnrotor.waveform.modes.Modes.polarizations` (same arguments) as two LAL
     ``REAL8TimeSeries`` (strain; epoch the first sample's time, Δt the sampling)."""
+    if distance is None and modes.distance_Mpc is None:
+        raise ValueError("LAL's polarizations are strain: give a distance (here or to pnrotor.modes)")
     dt = _uniform_step(modes)
     hp, hc = modes.polarizations(inclination, phi_ref, distance, psi)
     return tuple(_series(lal.CreateREAL8TimeSeries, name, modes.t_seconds[0], dt, lal.StrainUnit, h)

@@ -72,15 +72,17 @@ class Population:
 @njit(parallel=True, cache=True)
 def _integrate_all(rhs, after_step, events, Y0, P, t_end, directions, atol, rtol, max_steps, safety,
                    min_factor, max_factor, mode, R0, ell0, c1, c2, rows, t, v, Phi, chi1, chi2, R, ell, counts,
-                   no_t, no_coef):
+                   no_t, no_coef, out_mode, want_dense):
     """Binary k of the group (state Y0[k], parameters P[k]) integrated to its end; its final state into row
     rows[k] of the outputs (t, v, …, ℓ̂) and (status, event index, step attempts, evaluations) into
-    counts[rows[k]]; ``no_t`` (empty) and ``no_coef`` stand for the unused times and dense output."""
+    counts[rows[k]]; ``no_t`` (empty) and ``no_coef`` stand for the unused times and dense output, and
+    ``out_mode`` (OUT_FINAL), ``want_dense`` (False) come as arguments so that the core is called with the
+    types of its one signature (written as constants here, numba compiled a second core, ~7 s)."""
     n_events = directions.shape[1]
     for k in prange(Y0.shape[0]):
         t_out, y_out, _, _, _, iv, _, _ = _dop853_core(
             rhs, after_step, events, 0.0, Y0[k], t_end[k], P[k], atol, rtol, 0.0, np.inf, max_steps, no_t,
-            OUT_FINAL, False, n_events, directions[k], safety, min_factor, max_factor)
+            out_mode, want_dense, n_events, directions[k], safety, min_factor, max_factor)
         last = iv[IV_NOUT] - 1
         i = rows[k]
         t[i] = t_out[last]
@@ -183,7 +185,7 @@ integrate_rotor, precession, max_steps
                        np.array([s.R0 for s in ss]), np.array([s.ell_hat for s in ss]),
                        np.array([s.chi1 for s in ss]), np.array([s.chi2 for s in ss]),
                        np.array(rows, dtype=np.int64), out.t, out.v, out.Phi, out.chi1, out.chi2, out.R,
-                       out.ell_hat, counts, np.empty(0), np.empty((1, 8, 1)))
+                       out.ell_hat, counts, np.empty(0), np.empty((1, 8, 1)), OUT_FINAL, False)
     for i in range(n):
         if ends[i] is not None:
             status, event = counts[i, :2]
