@@ -80,10 +80,8 @@ def test_existing_output_refused_before_running_unless_overwrite(table, tmp_path
     assert out.read_bytes() == b"keep"
 
 
-@pytest.mark.parametrize("jobs", [1, 2])
-def test_interrupted_batch_keeps_its_finished_runs_and_resumes(table, tmp_path, monkeypatch, jobs):
-    """Ctrl-C at the third run: no batch file, the finished runs in OUT.parts; resume=True computes only
-    the others and the file equals an uninterrupted batch's bitwise (issue 15: every finished run was lost)."""
+def interrupt_third_run(monkeypatch):
+    """Make the batch backends' third evolve_row call raise KeyboardInterrupt (Ctrl-C); → the list of calls."""
     real, calls = batch.backends.evolve_row, []
 
     def interrupt_third(params):
@@ -93,6 +91,14 @@ def test_interrupted_batch_keeps_its_finished_runs_and_resumes(table, tmp_path, 
         return real(params)
 
     monkeypatch.setattr(batch.backends, "evolve_row", interrupt_third)
+    return calls
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_interrupted_batch_keeps_its_finished_runs_and_resumes(table, tmp_path, monkeypatch, jobs):
+    """Ctrl-C at the third run: no batch file, the finished runs in OUT.parts; resume=True computes only
+    the others and the file equals an uninterrupted batch's bitwise (issue 15: every finished run was lost)."""
+    real, calls = batch.backends.evolve_row, interrupt_third_run(monkeypatch)
     with pytest.raises(KeyboardInterrupt, match="finished runs? kept in .*out.h5.parts; complete the batch"):
         batch.run(table, tmp_path / "out.h5", jobs=1)
     assert sorted(os.listdir(tmp_path)) == ["binaries.csv", "out.h5.parts"]
@@ -234,15 +240,8 @@ def test_modes_beside_each_run_and_kept_by_resume(table, tmp_path, monkeypatch, 
         got = hdf5.read(out, f"{name}.modes")
         np.testing.assert_array_equal(got.data, expected.data)
         assert got.distance_Mpc == 100.0
-    real, calls = batch.backends.evolve_row, []
-
-    def interrupt_third(params):
-        calls.append(params)
-        if len(calls) == 3:
-            raise KeyboardInterrupt
-        return real(params)
-
-    monkeypatch.setattr(batch.backends, "evolve_row", interrupt_third)
+    real = batch.backends.evolve_row
+    interrupt_third_run(monkeypatch)
     with pytest.raises(KeyboardInterrupt):
         batch.run(table, tmp_path / "again.h5", jobs=1, modes=(4, 1.5, 100.0))
     with pytest.raises(ValueError, match="holds runs of another table"):
