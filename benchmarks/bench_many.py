@@ -8,6 +8,9 @@ each integrated to one state:
   (timed only: with fEnd = 0, or an fEnd beyond the end, it returns the initial v and zero spins, since it
   stores a state only on reaching fEnd; its integration runs all the same).
 * ``100 Hz``: forward to f_GW = 100 Hz, where both return a state (LAL's at its first step past fEnd).
+* ``list``: the states at 10 frequencies, 10 … 200 Hz on both sides of f_ref, with ``frequencies=`` (one
+  integration per direction) against 10 ``evolve_many`` calls with f_end (one integration per target) and
+  LAL's one call per target (backward targets: LAL integrates from fStart = the target up to f_ref).
 
 Rates, medians of interleaved rounds: pnrotor ``evolve_many`` with numba's threads (all cores) and with
 one thread; pnrotor single ``evolve(..., sampling='final')`` calls in a Python loop; LAL one call per
@@ -50,6 +53,15 @@ def lal_final(m1, m2, c1, c2, f_end):
     for i in range(m1.size):
         ls.SimInspiralSpinTaylorPNEvolveOrbitOnlyFinal(
             1.0 / 4096, m1[i] * lal.MSUN_SI, m2[i] * lal.MSUN_SI, 20.0, f_end, *c1[i], *c2[i], 0.0, 0.0, 1.0,
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, -1, 0, 7, 0, T4)
+
+
+def lal_from(m1, m2, c1, c2, f_start):
+    """LAL's integration from f_start to f_ref = 20 Hz (its stand-in for a backward target: it integrates only
+    forward, so the spins at f_start would have to be searched for; this times one such integration)."""
+    for i in range(m1.size):
+        ls.SimInspiralSpinTaylorPNEvolveOrbitOnlyFinal(
+            1.0 / 4096, m1[i] * lal.MSUN_SI, m2[i] * lal.MSUN_SI, f_start, 20.0, *c1[i], *c2[i], 0.0, 0.0, 1.0,
             1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, -1, 0, 7, 0, T4)
 
 
@@ -104,6 +116,19 @@ def main():
         steps = np.mean(evolve_many(*sub, 20.0, f_end=f_end, **ORDERS).nsteps)
         print(f"{label:>8} {med['many']:>10.0f}/s {med['many1']:>8.0f}/s {med['single']:>10.0f}/s "
               f"{med['lal']:>8.0f}/s {med['many'] / med['lal']:>8.1f}x {med['python']:>17.1f} {steps:>6.1f}")
+
+    freqs = np.array([10.0, 12.0, 15.0, 17.0, 25.0, 35.0, 50.0, 70.0, 100.0, 200.0])
+    print(f"\n{freqs.size} frequencies {freqs.min():g}-{freqs.max():g} Hz per binary: binaries/s")
+    print(f"{'frequencies=':>14} {'f_end loop':>12} {'LAL':>10} {'list/f_end':>11} {'list/LAL':>9}")
+    rates = {k: [] for k in ("list", "loop", "lal")}
+    for _ in range(args.rounds):
+        rates["list"].append(args.n / timed(lambda: evolve_many(*pop, 20.0, frequencies=freqs, **ORDERS)))
+        rates["loop"].append(args.n / timed(lambda: [evolve_many(*pop, 20.0, f_end=f, **ORDERS) for f in freqs]))
+        rates["lal"].append(args.lal_n / timed(lambda: [lal_final(*sub, f) if f > 20.0 else lal_from(*sub, f)
+                                                        for f in freqs]))
+    med = {k: statistics.median(v) for k, v in rates.items()}
+    print(f"{med['list']:>12.0f}/s {med['loop']:>10.0f}/s {med['lal']:>8.0f}/s {med['list'] / med['loop']:>10.1f}x "
+          f"{med['list'] / med['lal']:>8.1f}x")
 
 
 if __name__ == "__main__":

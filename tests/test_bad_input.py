@@ -31,6 +31,7 @@ EVOLVE_CASES = [
     (dict(f_ref=1500.0), "f_ref"),  # v < 1 but the PN energy balance is already invalid
     (dict(f_min=NAN), "f_min"), (dict(f_min=30.0), "f_min"), (dict(f_min=-1.0), "f_min"),
     (dict(f_max=INF), "f_max"), (dict(f_max=10.0), "f_max"), (dict(f_max=0.0), "f_max"),
+    (dict(f_max=1e5), "f_max"),  # v > 1 (was integrated, by T1 to v = 3.2)
     (dict(atol=0.0), "atol"), (dict(atol=-1e-12), "atol"), (dict(atol=NAN), "atol"), (dict(rtol=-1e-9), "rtol"),
     (dict(rtol=INF), "rtol"),
     (dict(ell_hat=(0.0, 0.0, 0.0)), "ell_hat"), (dict(ell_hat=(NAN, 0.0, 1.0)), "ell_hat"),

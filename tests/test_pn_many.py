@@ -128,3 +128,65 @@ def test_evolve_many_calls_the_one_compiled_core(tmp_path):
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
                           env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path)))
     assert done.stdout.strip() == "True", done.stderr[-2000:]
+
+
+def _assert_entry_same_as_single(pop, i, k, table, f_ref, f, options):
+    t, state, term, _ = _single_end(i, *table, f_ref, f, options)
+    assert pop.t[i, k] == t and pop.termination[i, k] == term, (i, k)
+    for name, x in zip(FIELDS, state):
+        np.testing.assert_array_equal(getattr(pop, name)[i, k], x, err_msg=f"binary {i}, target {k}, {name}")
+
+
+@pytest.mark.parametrize("options", [{}, {"approximant": "T1", "rotor": "orbital", "atol": 1e-10}])
+def test_a_list_of_frequencies_equals_single_evolves_to_each(options):
+    """Unordered targets on both sides of f_ref, one beyond the end of every inspiral: each entry is what evolve
+    with f_max (or f_min) there returns, bitwise, from one integration per direction."""
+    table = _table(8, 5)
+    M_sec = (table[0] + table[1]) * 4.925490947641267e-06
+    beyond = 0.9 ** 3 / (np.pi * M_sec)            # v = 0.9: past the end of most inspirals here
+    freqs = np.stack(np.broadcast_arrays(35.0, 12.0, beyond, 25.0, 16.0, 60.0), axis=1)
+    pop = evolve_many(*table[:4], 20.0, frequencies=freqs, ell_hat=table[4], n_hat=table[5], **options)
+    assert pop.v.shape == (8, 6) and pop.chi1.shape == (8, 6, 3) and pop.termination.shape == (8, 6)
+    for i in range(8):
+        for k, f in enumerate(freqs[i]):
+            _assert_entry_same_as_single(pop, i, k, table, 20.0, f, options)
+    assert np.all(pop.termination[:, [0, 3, 5]] == "f_max") and np.all(pop.termination[:, [1, 4]] == "f_min")
+    assert "energy_balance" in set(pop.termination[:, 2]) and "invalid" not in set(pop.termination[:, 2])
+    # one integration per direction: the forward targets share their step count, as do the backward ones
+    assert np.all(pop.nfev[:, [0, 2, 3, 5]] == pop.nfev[:, [0]]) and np.all(pop.nfev[:, 1] == pop.nfev[:, 4])
+
+
+def test_targets_on_the_last_step_of_a_run_that_ends_first():
+    """Targets within the last step of an inspiral that ends by another event: just before that event the target
+    is reached, just after it the run's end comes first, as the core decides between two events of one step."""
+    table = tuple(x[[0, 2, 3]] for x in _table(4, 6))      # (the aligned binary 1 reaches v = 1)
+    end = evolve_many(*table[:4], 20.0, ell_hat=table[4], n_hat=table[5])
+    M_sec = (table[0] + table[1]) * 4.925490947641267e-06
+    assert np.all(end.v < 0.9)
+    freqs = np.stack([end.v ** 3 * (1 - 1e-7), end.v ** 3 * (1 + 1e-7), np.full(3, 0.9 ** 3)], axis=1) / (np.pi * M_sec)[:, None]
+    pop = evolve_many(*table[:4], 20.0, frequencies=freqs, ell_hat=table[4], n_hat=table[5])
+    assert np.all(pop.termination[:, 0] == "f_max") and np.all(pop.termination[:, 1:] == end.termination[:, None])
+    for i in range(3):
+        for k in range(3):
+            _assert_entry_same_as_single(pop, i, k, table, 20.0, freqs[i, k], {})
+
+
+def test_refused_targets_leave_the_others():
+    pop = evolve_many([30.0, -1.0], [10.0, 10.0], [0, 0, 0.5], [0, 0, 0], 20.0,
+                      frequencies=[30.0, 20.0, 1e-9, 15.0, 1e5])
+    assert list(pop.termination[0]) == ["f_max", "invalid", "invalid", "f_min", "invalid"]
+    assert "is f_ref" in pop.message[0, 1] and "frequencies[2]" in pop.message[0, 2] and "at least" in pop.message[0, 2]
+    assert "frequencies[4]" in pop.message[0, 4] and "at most" in pop.message[0, 4]
+    assert np.all(np.isnan(pop.v[0, [1, 2, 4]])) and not np.any(np.isnan(pop.v[0, [0, 3]]))
+    assert list(pop.termination[1]) == ["invalid"] * 5 and all("m1" in m for m in pop.message[1])
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"frequencies": [30.0], "f_end": 30.0}, "not both"),
+    ({"frequencies": np.ones((3, 2)) * 30}, r"frequencies must have shape \(K,\) or \(N, K\)"),
+    ({"frequencies": []}, "K >= 1"),
+    ({"frequencies": [30.0, np.nan]}, "finite and > 0"),
+])
+def test_bad_frequency_lists_raise(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        evolve_many([30.0, 20.0], [10.0, 10.0], [0, 0, 0], [0, 0, 0], 20.0, **kwargs)

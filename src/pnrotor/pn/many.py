@@ -1,8 +1,9 @@
 r"""``evolve_many``: a population of binaries, each integrated to one end, in one compiled parallel loop.
 
-What population studies need from each binary is one state: the spins and ℓ̂ at a target frequency
-(forward or backward from f_ref), or the state at the end of the inspiral.  :func:`evolve_many` gives
-exactly what :func:`pnrotor.pn.evolve.evolve` would give for that state, binary by binary:
+What population studies need from each binary is one state or a few: the spins and ℓ̂ at a target
+frequency (forward or backward from f_ref), the state at a list of frequencies, or the state at the end of
+the inspiral.  :func:`evolve_many` gives exactly what :func:`pnrotor.pn.evolve.evolve` would give for each
+of those states, binary by binary:
 
 * each binary's inputs are checked and its system built by the same stages as ``evolve``
   (:func:`~pnrotor.pn.settings.settings`, :func:`~pnrotor.pn.evolve.build_system`,
@@ -13,8 +14,16 @@ exactly what :func:`pnrotor.pn.evolve.evolve` would give for that state, binary 
   system of nonspinning and aligned binaries, the precessing one);
 * the final state becomes (v, Φ, χ₁, χ₂, R, ℓ̂) by the kernel of :func:`pnrotor.pn.sampling.sample`.
 
+A list of K frequencies costs one integration per direction, not K: each half runs to its farthest target
+with dense output, and every nearer target is found on the step that crosses it as the integrator would
+find its terminal event there (:func:`_nearer_targets`).
+
 The results are bitwise those of single ``evolve`` calls (tests/test_pn_many.py): the same parameter
-vector, initial state, tolerances, controller and events go to the same compiled core.
+vector, initial state, tolerances, controller and events go to the same compiled core; a nearer target is
+located by the same root finder on the same step's interpolant from the same event values, since a run to a
+farther v takes the same steps up to there (the events do not change the steps).  One proviso: the backward
+half runs within the time bound of its farthest target, which is longer than a nearer target's (2× the
+Newtonian time, :func:`~pnrotor.pn.evolve.half`); a single run that hit its own bound would end sooner.
 """
 
 import math
@@ -24,30 +33,38 @@ import numpy as np
 from numba import njit, prange
 
 from ..ode import AFTER_STEP_SIG, by_address
-from ..ode.dop853 import IV_EVENT, IV_NFEV, IV_NOUT, IV_NSTEPS, IV_STATUS, OUT_FINAL, _dop853_core, no_after_step
+from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
+                          STATUS_EVENT, _crossed, _dop853_core, _locate_root, no_after_step)
+from ..ode.result import contd8
+from . import initial as _ini
 from .evolve import _CONTROLLER, TERMINATION_MESSAGES, _tolerances, build_system, half, termination
 from .sampling import _fill_history, output_mode
-from .settings import settings
+from .settings import V_MIN, settings
+from .system import EV_V_END, N_EVENTS, P_VEND
 
 __all__ = ["evolve_many", "Population"]
 
 
+
 @dataclass
 class Population:
-    """The end state of every binary of :func:`evolve_many` (row i is binary i; NaN where ``termination``
-    is ``'invalid'``).
+    """The states of :func:`evolve_many`: row i is binary i, with a second axis k over the target
+    frequencies when ``frequencies`` was given (NaN where ``termination`` is ``'invalid'``).
 
     Attributes
     ----------
-    t : (N,) time of the state in units of each binary's total mass M (t = 0 at f_ref)
-    t_seconds : (N,) the same in seconds
-    v, Phi : (N,) PN parameter and orbital phase (Φ = 0 at f_ref)
-    chi1, chi2 : (N, 3) dimensionless spins, inertial frame
-    R : (N, 4) unit orbital-frame rotor (n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹)
-    ell_hat : (N, 3) orbital angular momentum direction
-    termination : (N,) str — why each integration stopped (:mod:`pnrotor.pn.evolve`), or ``'invalid'``
-    message : (N,) str — the termination's message, or the error naming the bad input
-    nsteps, nfev : (N,) int — the integrator's step attempts and right-hand-side evaluations
+    t : (N,) or (N, K) time of the state in units of each binary's total mass M (t = 0 at f_ref)
+    t_seconds : the same in seconds
+    v, Phi : PN parameter and orbital phase (Φ = 0 at f_ref)
+    chi1, chi2 : (N, 3) or (N, K, 3) dimensionless spins, inertial frame
+    R : (N, 4) or (N, K, 4) unit orbital-frame rotor (n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹)
+    ell_hat : (N, 3) or (N, K, 3) orbital angular momentum direction
+    termination : str — why the integration to that state stopped (:mod:`pnrotor.pn.evolve`): ``'f_max'`` or
+        ``'f_min'`` where the target frequency was reached, else why the inspiral ended first (the state is
+        then that end's), or ``'invalid'``
+    message : str — the termination's message, or the error naming the bad input
+    nsteps, nfev : int — the step attempts and right-hand-side evaluations of the integration that gave the
+        state (one per binary and direction: the targets of a list share it)
     inputs : dict — the options shared by every binary
     """
 
@@ -66,32 +83,76 @@ class Population:
     inputs: dict = field(default_factory=dict)
 
     def __len__(self):
-        return self.t.size
+        return self.t.shape[0]
 
 
 @njit(parallel=True, cache=True)
 def _integrate_all(rhs, after_step, events, Y0, P, t_end, directions, atol, rtol, max_steps, safety,
-                   min_factor, max_factor, mode, R0, ell0, c1, c2, rows, t, v, Phi, chi1, chi2, R, ell, counts,
-                   no_t, no_coef, out_mode, want_dense):
-    """Binary k of the group (state Y0[k], parameters P[k]) integrated to its end; its final state into row
+                   min_factor, max_factor, mode, R0, ell0, c1, c2, rows, near_v, near_rows, t, v, Phi, chi1, chi2,
+                   R, ell, counts, no_t, out_mode):
+    """Half k of the group (state Y0[k], parameters P[k]) integrated to its end; its final state into row
     rows[k] of the outputs (t, v, …, ℓ̂) and (status, event index, step attempts, evaluations) into
-    counts[rows[k]]; ``no_t`` (empty) and ``no_coef`` stand for the unused times and dense output, and
-    ``out_mode`` (OUT_FINAL), ``want_dense`` (False) come as arguments so that the core is called with the
-    types of its one signature (written as constants here, numba compiled a second core, ~7 s)."""
+    counts[rows[k]]; the states at the nearer targets v = near_v[k, j] into the rows near_rows[k, j] (−1:
+    none), by :func:`_nearer_targets` on the dense output, computed only for halves that have them.  ``no_t``
+    (empty) stands for the unused times, and ``out_mode`` (OUT_FINAL) comes as an argument so that the core is
+    called with the types of its one signature (written as a constant here, numba compiled a second core,
+    ~7 s)."""
     n_events = directions.shape[1]
     for k in prange(Y0.shape[0]):
-        t_out, y_out, _, _, _, iv, _, _ = _dop853_core(
+        want_dense = near_rows.shape[1] > 0 and near_rows[k, 0] >= 0
+        t_out, y_out, seg_t, seg_h, seg_c, iv, fv, _ = _dop853_core(
             rhs, after_step, events, 0.0, Y0[k], t_end[k], P[k], atol, rtol, 0.0, np.inf, max_steps, no_t,
             out_mode, want_dense, n_events, directions[k], safety, min_factor, max_factor)
         last = iv[IV_NOUT] - 1
-        i = rows[k]
-        t[i] = t_out[last]
-        _fill_history(mode, no_t, no_t, no_coef, no_t, False, y_out[last:last + 1], R0[k], ell0[k], c1[k],
-                      c2[k], i, v, Phi, chi1, chi2, R, ell)
-        counts[i, 0] = iv[IV_STATUS]
-        counts[i, 1] = iv[IV_EVENT]
-        counts[i, 2] = iv[IV_NSTEPS]
-        counts[i, 3] = iv[IV_NFEV]
+        final = y_out[last:last + 1]
+        for j in range(-1, near_rows.shape[1]):
+            i = rows[k] if j < 0 else near_rows[k, j]
+            if i < 0:
+                break
+            if j < 0:
+                ti, yi, status, event = t_out[last], final, iv[IV_STATUS], iv[IV_EVENT]
+            else:
+                ti, yi, status, event = _nearer_targets(events, P[k], near_v[k, j], directions[k, EV_V_END],
+                                                        seg_t, seg_h, seg_c, iv, fv, t_out[last], final)
+            t[i] = ti
+            _fill_history(mode, no_t, no_t, seg_c, no_t, False, yi, R0[k], ell0[k], c1[k], c2[k], i, v, Phi, chi1,
+                          chi2, R, ell)
+            counts[i, 0] = status
+            counts[i, 1] = event
+            counts[i, 2] = iv[IV_NSTEPS]
+            counts[i, 3] = iv[IV_NFEV]
+
+
+@njit(cache=True)
+def _nearer_targets(events, p_run, v_target, direction, seg_t, seg_h, seg_c, iv, fv, t_final, final):
+    """(t, state (1, n), status, event index) that a run stopping at ``v_target`` (event 0 of the events, in
+    ``direction``) would end with, from a run to a farther v with dense output: the first step across
+    v_target, with the event values v − v_target at its ends (the start of the next step, or y + (y_new − y) =
+    y_new for the last one, exact as |v| changes by far less than 2× in a step), the root of the same
+    :func:`~pnrotor.ode.dop853._locate_root` and the same ``contd8``.  Unless another event of that last
+    step comes strictly first, as the core decides, or v_target is never crossed: then the run's own end."""
+    p = p_run.copy()
+    p[P_VEND] = v_target
+    n = seg_c.shape[2]
+    yint = np.empty(n)
+    gtmp = np.empty(N_EVENTS)
+    nseg = iv[IV_NSEG]
+    for s in range(nseg):
+        rc = seg_c[s]
+        last = s + 1 == nseg
+        g_a = rc[0, 0] - v_target
+        g_b = (rc[0, 0] + rc[1, 0] if last else seg_c[s + 1, 0, 0]) - v_target
+        if not _crossed(g_a, g_b, direction):
+            continue
+        t_a, h = seg_t[s], seg_h[s]
+        t_b = t_a + h if last else seg_t[s + 1]
+        root = _locate_root(events, p, EV_V_END, t_a, t_b, g_a, g_b, t_a, h, rc, yint, gtmp)
+        if last and iv[IV_STATUS] == STATUS_EVENT and iv[IV_EVENT] != EV_V_END and (fv[FV_TEVENT] - root) * h < 0.0:
+            break
+        y = np.empty((1, n))
+        contd8(rc, (root - t_a) / h, y[0])
+        return root, y, STATUS_EVENT, EV_V_END
+    return t_final, final, iv[IV_STATUS], iv[IV_EVENT]
 
 
 def _per_binary(x, n, name, shape=()):
@@ -104,11 +165,50 @@ def _per_binary(x, n, name, shape=()):
                          f"got {np.shape(x)}") from None
 
 
-def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0),
-                kappa1=1.0, kappa2=1.0, approximant="T4", pn_order=3.5, spin_orbit_order=None,
-                spin_spin_order=None, atol=1e-12, rtol=0.0, rotor="coprecessing", precession_phase_shift=None,
-                integrate_rotor=False, precession="averaged", max_steps=2_000_000):
-    r"""Evolve N binaries from f_ref to one end each → :class:`Population` (module docstring).
+def _target_table(f_end, frequencies, n):
+    """(N, K) target frequencies (NaN: to the end of the inspiral) and whether the outputs keep the K axis."""
+    if frequencies is None:
+        return _per_binary(np.nan if f_end is None else f_end, n, "f_end")[:, None], False
+    if f_end is not None:
+        raise ValueError("give f_end (one state per binary) or frequencies (a list of them), not both")
+    f = np.asarray(frequencies, dtype=np.float64)
+    if f.ndim == 1:
+        f = np.broadcast_to(f, (n, f.size))
+    if f.ndim != 2 or f.shape[0] != n or f.shape[1] == 0:
+        raise ValueError(f"frequencies must have shape (K,) or (N, K) with K >= 1 and N = {n} binaries, "
+                         f"got {np.shape(frequencies)}")
+    if not np.all(np.isfinite(f) & (f > 0.0)):
+        raise ValueError("frequencies must be finite and > 0 (Hz)")
+    return np.ascontiguousarray(f), True
+
+
+def _refused_targets(f, m1, m2, f_ref):
+    """{k: message} of the listed frequencies that ``evolve`` would refuse as f_max or f_min for a binary it
+    accepts: f_ref itself, and those outside the PN range (v > 1 or v < V_MIN, the checks of
+    :func:`~pnrotor.pn.settings.settings`); the binary's other targets go on."""
+    refused = {}
+    if not (m1 > 0.0 and m2 > 0.0 and math.isfinite(m1 + m2)):
+        return refused    # the binary itself is invalid (settings says why)
+    M_sec = _ini.total_mass_seconds(m1, m2)
+    for k, x in enumerate(f):
+        v = _ini.v_from_frequency(x, M_sec)
+        if x == f_ref:
+            refused[k] = f"frequencies[{k}] = {x} Hz is f_ref: a target must differ from f_ref"
+        elif v > 1.0:
+            refused[k] = (f"frequencies[{k}] = {x} Hz gives v = {v:.4g} > 1; for these masses a target must be at "
+                          f"most {1.0 / (math.pi * M_sec):.6g} Hz")
+        elif v < V_MIN:
+            refused[k] = (f"frequencies[{k}] = {x} Hz gives v = {v:.4g} < {V_MIN:g}; for these masses a target "
+                          f"must be at least {_ini.frequency_from_v(V_MIN, M_sec):.6g} Hz")
+    return refused
+
+
+def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_hat=(0.0, 0.0, 1.0),
+                n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, approximant="T4", pn_order=3.5,
+                spin_orbit_order=None, spin_spin_order=None, atol=1e-12, rtol=0.0, rotor="coprecessing",
+                precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000):
+    r"""Evolve N binaries from f_ref → :class:`Population` of their states at the end of the inspiral, at
+    f_end or at a list of frequencies (module docstring).
 
     Parameters
     ----------
@@ -119,6 +219,11 @@ def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, ell_hat=(0.0, 0.0, 1.0
     f_end : None, scalar or array_like (N,)
         The GW frequency to integrate to: above f_ref forward (``evolve``'s f_max), below f_ref backward
         (its f_min); None (or NaN for a binary) integrates forward to the end of the inspiral.
+    frequencies : None or array_like (K,) or (N, K)
+        Instead of f_end: K GW frequencies (Hz, finite, > 0; shared or per binary), in any order and on either
+        side of f_ref; the state at each, as ``evolve`` with f_max (or f_min) there would end.  The outputs
+        gain a K axis.  A frequency ``evolve`` would refuse (f_ref itself, or outside the PN range) gives an
+        ``'invalid'`` entry; the binary's other targets go on.
     ell_hat, n_hat : array_like (N, 3) or (3,)
         ℓ̂ and n̂ at f_ref.
     kappa1, kappa2 : array_like (N,) or scalar
@@ -128,7 +233,7 @@ integrate_rotor, precession, max_steps
         As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
 
     The number of threads is numba's (``numba.set_num_threads``, ``NUMBA_NUM_THREADS``).  Invalid shared
-    options raise a ValueError; an invalid binary does not (module docstring).
+    options or array shapes raise a ValueError; an invalid binary does not (module docstring).
     """
     try:
         shape = np.broadcast_shapes(np.shape(m1), np.shape(m2), np.shape(f_ref))
@@ -139,7 +244,8 @@ integrate_rotor, precession, max_steps
                          f"scalars, got shapes {np.shape(m1)}, {np.shape(m2)}, {np.shape(f_ref)}")
     n = shape[0]
     m1a, m2a, fref = (_per_binary(x, n, name) for x, name in ((m1, "m1"), (m2, "m2"), (f_ref, "f_ref")))
-    fend = _per_binary(np.nan if f_end is None else f_end, n, "f_end")
+    targets, listed = _target_table(f_end, frequencies, n)
+    K = targets.shape[1]
     k1, k2 = _per_binary(kappa1, n, "kappa1"), _per_binary(kappa2, n, "kappa2")
     c1, c2, ell, nh = (_per_binary(x, n, name, (3,)) for x, name in
                        ((chi1, "chi1"), (chi2, "chi2"), (ell_hat, "ell_hat"), (n_hat, "n_hat")))
@@ -153,44 +259,73 @@ integrate_rotor, precession, max_steps
                            ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0,
                            **shared).approximant
 
-    out = Population(t=np.full(n, np.nan), t_seconds=np.full(n, np.nan), v=np.full(n, np.nan),
-                     Phi=np.full(n, np.nan), chi1=np.full((n, 3), np.nan), chi2=np.full((n, 3), np.nan),
-                     R=np.full((n, 4), np.nan), ell_hat=np.full((n, 3), np.nan),
-                     termination=np.full(n, "invalid", dtype=object), message=np.full(n, "", dtype=object),
-                     nsteps=np.zeros(n, dtype=np.int64), nfev=np.zeros(n, dtype=np.int64),
+    # one row per (binary, target), row i·K + k; reshaped to (N, K) at the end
+    nr = n * K
+    out = Population(t=np.full(nr, np.nan), t_seconds=np.full(nr, np.nan), v=np.full(nr, np.nan),
+                     Phi=np.full(nr, np.nan), chi1=np.full((nr, 3), np.nan), chi2=np.full((nr, 3), np.nan),
+                     R=np.full((nr, 4), np.nan), ell_hat=np.full((nr, 3), np.nan),
+                     termination=np.full(nr, "invalid", dtype=object), message=np.full(nr, "", dtype=object),
+                     nsteps=np.zeros(nr, dtype=np.int64), nfev=np.zeros(nr, dtype=np.int64),
                      inputs={k: v for k, v in shared.items() if k != "sampling"})
-    groups, ends, M_sec = {}, [None] * n, np.full(n, np.nan)
+    groups, ends, M_sec = {}, [None] * nr, np.full(nr, np.nan)
     for i in range(n):
-        forward = not fend[i] < fref[i]   # NaN (no f_end) integrates forward
-        target = None if math.isnan(fend[i]) else float(fend[i])
+        f = targets[i]
+        skip = _refused_targets(f, m1a[i], m2a[i], fref[i]) if listed else {}
+        kept = np.ones(K, dtype=bool)
+        kept[list(skip)] = False
+        behind = (f < fref[i]) & kept
+        ahead = ~(f < fref[i]) & kept          # NaN (f_end mode: to the end of the inspiral) goes forward
+        halves = [(True, np.flatnonzero(ahead)), (False, np.flatnonzero(behind))]
         try:
-            s = settings(m1a[i], m2a[i], c1[i], c2[i], fref[i], f_min=None if forward else target,
-                         f_max=target if forward else None, ell_hat=ell[i], n_hat=nh[i], kappa1=k1[i],
-                         kappa2=k2[i], **shared)
+            s = settings(m1a[i], m2a[i], c1[i], c2[i], fref[i], f_min=f[behind].min() if behind.any() else None,
+                         f_max=None if np.isnan(f[ahead]).all() else f[ahead].max(), ell_hat=ell[i], n_hat=nh[i],
+                         kappa1=k1[i], kappa2=k2[i], **shared)
             system = build_system(s)
         except ValueError as e:
-            out.message[i] = str(e)
+            out.message[i * K:(i + 1) * K] = str(e)
             continue
-        p, t_end, directions, ends[i] = half(s, system, forward)
-        M_sec[i] = s.M_sec
-        key = (system.rhs, system.events, output_mode(s), system.y0.size)
-        groups.setdefault(key, []).append((i, system.y0, p, t_end, directions, s))
-    counts = np.zeros((n, 4), dtype=np.int64)
+        for k, why in skip.items():
+            out.message[i * K + k] = why
+        M_sec[i * K:(i + 1) * K] = s.M_sec
+        for forward, ks in halves:
+            if ks.size == 0:
+                continue
+            p, t_end, directions, end = half(s, system, forward)
+            # the farthest target ends the integration; the others are found on its dense output
+            v_k = np.array([_ini.v_from_frequency(x, s.M_sec) for x in f[ks]])
+            order = np.argsort(v_k if forward else -v_k, kind="stable")
+            rows = i * K + ks[order]
+            for r in rows:
+                ends[r] = end
+            key = (system.rhs, system.events, output_mode(s), system.y0.size)
+            groups.setdefault(key, []).append((rows[-1], system.y0, p, t_end, directions, s, rows[:-1],
+                                               v_k[order][:-1]))
+    counts = np.zeros((nr, 4), dtype=np.int64)
     after_step = by_address(no_after_step, AFTER_STEP_SIG)
     for (rhs, events, mode, size), members in groups.items():
         atol_a, rtol_a = _tolerances(size, float(atol), float(rtol))
-        rows, y0, p, t_end, directions, ss = zip(*members)
+        rows, y0, p, t_end, directions, ss, near_rows, near_v = zip(*members)
+        width = max(r.size for r in near_rows)
+        near_r = np.full((len(members), width), -1, dtype=np.int64)
+        near_vk = np.full((len(members), width), np.nan)
+        for j, (r, vk) in enumerate(zip(near_rows, near_v)):
+            near_r[j, :r.size], near_vk[j, :r.size] = r, vk
         _integrate_all(rhs, after_step, events, np.array(y0), np.array(p), np.array(t_end), np.array(directions),
                        atol_a, rtol_a, int(max_steps), *_CONTROLLER, mode,
                        np.array([s.R0 for s in ss]), np.array([s.ell_hat for s in ss]),
                        np.array([s.chi1 for s in ss]), np.array([s.chi2 for s in ss]),
-                       np.array(rows, dtype=np.int64), out.t, out.v, out.Phi, out.chi1, out.chi2, out.R,
-                       out.ell_hat, counts, np.empty(0), np.empty((1, 8, 1)), OUT_FINAL, False)
-    for i in range(n):
-        if ends[i] is not None:
-            status, event = counts[i, :2]
-            out.termination[i] = termination(status, event, ends[i], approximant)
-            out.message[i] = TERMINATION_MESSAGES[out.termination[i]]
+                       np.array(rows, dtype=np.int64), near_vk, near_r, out.t, out.v, out.Phi, out.chi1, out.chi2,
+                       out.R, out.ell_hat, counts, np.empty(0), OUT_FINAL)
+    for r in range(nr):
+        if ends[r] is not None:
+            status, event = counts[r, :2]
+            out.termination[r] = termination(status, event, ends[r], approximant)
+            out.message[r] = TERMINATION_MESSAGES[out.termination[r]]
     out.nsteps[:], out.nfev[:] = counts[:, 2], counts[:, 3]
     out.t_seconds[:] = out.t * M_sec
+    if listed:
+        for name in ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat", "termination", "message",
+                     "nsteps", "nfev"):
+            x = getattr(out, name)
+            setattr(out, name, x.reshape((n, K) + x.shape[1:]))
     return out

@@ -168,7 +168,7 @@ def _kappa(kappa, name):
 
 def _frequencies(m1, m2, f_ref, f_min, f_max):
     """(G M/c³ in s, X₁, v at f_ref, at f_min (or None), at f_max (or 1)), checking the mass ratio, the order of
-    the frequencies and V_MIN ≤ v < 1."""
+    the frequencies, V_MIN ≤ v < 1 at f_min and f_ref and v ≤ 1 at f_max."""
     if not max(m1, m2) <= MAX_MASS_RATIO * min(m1, m2):
         raise ValueError(f"m1/m2 = {m1 / m2:.4g}: the mass ratio must be at most {MAX_MASS_RATIO:g} either way")
     M_sec = _ini.total_mass_seconds(m1, m2)
@@ -183,6 +183,9 @@ def _frequencies(m1, m2, f_ref, f_min, f_max):
         name, f, v = ("f_ref", f_ref, v0) if v0 < V_MIN else ("f_min", f_min, v_min)
         raise ValueError(f"{name} = {f} Hz gives v = {v:.4g} < {V_MIN:g}; for these masses {name} must be at "
                          f"least {_ini.frequency_from_v(V_MIN, M_sec):.6g} Hz")
+    if v_max > 1.0:
+        raise ValueError(f"f_max = {f_max} Hz gives v = {v_max:.4g} > 1; for these masses f_max must be at most "
+                         f"{1.0 / (math.pi * M_sec):.6g} Hz")
     if v_min is not None and not v_min < v0:
         raise ValueError(f"f_min = {f_min} Hz must be below f_ref = {f_ref} Hz")
     if not v_max > v0:
