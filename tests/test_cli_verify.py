@@ -80,3 +80,31 @@ def test_bench_writes_the_table_figures_and_findings(tmp_path, capsys):
 def test_bench_rejects_bad_input(tmp_path, capsys):
     assert main(["bench", "--atols", "0", "-o", str(tmp_path)]) == 2
     assert "--atols" in capsys.readouterr().err
+
+
+def test_bench_pn_writes_the_work_precision_study(tmp_path, capsys, monkeypatch):
+    """`pnrotor bench --pn` on one case (the study's default is four): the JSON, the figure, and what it measures
+    — the frame error against the converged reference falls with atol (down to round-off), LAL's SpinTaylorT4
+    is within 1e-6 rad of it, and at atol 1e-12 the error is below 1e-10 rad."""
+    pytest.importorskip("lalsimulation")
+    pytest.importorskip("matplotlib")
+    import json
+
+    from pnrotor import pn_study
+    monkeypatch.setattr(pn_study, "DEFAULT_CASES", ["BBH-aligned"])
+    out_dir = tmp_path / "pn"
+    assert main(["bench", "--pn", "--quick", "--no-scipy", "--repeat", "1", "-o", str(out_dir)]) == 0
+    out = capsys.readouterr().out
+    result = json.loads((out_dir / "pn_work_precision.json").read_text())
+    rows = result["cases"]["BBH-aligned"]["rows"]
+    frame = {r["tol"]: r["frame"] for r in rows if r["method"] == "pnrotor"}
+    assert [frame[a] for a in (1e-6, 1e-8, 1e-10, 1e-12)] == sorted(frame[a] for a in (1e-6, 1e-8, 1e-10, 1e-12))[::-1]
+    assert frame[1e-6] > 1e3 * frame[1e-12] and frame[1e-12] < 1e-10
+    lal = next(r for r in rows if r["method"] == "LAL T4")
+    assert 1e-12 < lal["frame"] < 1e-6 and lal["ms"] > 0
+    assert (out_dir / "pn_work_precision.png").stat().st_size > 0 and "at LAL's accuracy pnrotor is" in out
+
+
+def test_bench_pn_rejects_the_options_of_the_papers_study(tmp_path, capsys):
+    assert main(["bench", "--pn", "--t-end", "1e4", "-o", str(tmp_path)]) == 2
+    assert "--t-end" in capsys.readouterr().err
