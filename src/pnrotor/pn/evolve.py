@@ -175,8 +175,9 @@ def build_system(s):
     past the end of the inspiral (the terminal events only fire on crossing zero, so none may start there)."""
     kmax = kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order)
     c1, c2, ell = s.chi1, s.chi2, s.ell_hat
-    bvals = basis_values(float(np.dot(ell, c1)), float(np.dot(ell, c2)), float(np.dot(c1, c2)),
-                         float(np.dot(c1, c1)), float(np.dot(c2, c2)))
+    (x1, y1, z1), (x2, y2, z2), (lx, ly, lz) = c1.tolist(), c2.tolist(), ell.tolist()   # floats: cheaper than np.dot
+    bvals = basis_values(lx * x1 + ly * y1 + lz * z1, lx * x2 + ly * y2 + lz * z2, x1 * x2 + y1 * y2 + z1 * z2,
+                         x1 * x1 + y1 * y1 + z1 * z1, x2 * x2 + y2 * y2 + z2 * z2)
     p, at_v0 = _sys.make_parameters(
         s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
         kappa2=s.kappa2, v_end=s.v_max, rotor=s.rotor, phase_shift=s.precession_phase_shift,

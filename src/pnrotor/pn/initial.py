@@ -95,9 +95,15 @@ def _vec3(a, name):
     return x, y, z
 
 
+def _one_dimensional(a):
+    """Whether a is a tuple, a list (their items are checked by float()) or any 1-D array_like; np.ndim alone
+    costs ~1 µs on a tuple, a twentieth of the input checks of a run."""
+    return isinstance(a, (tuple, list)) or np.ndim(a) == 1
+
+
 def spin_vector(chi, name):
     """A dimensionless spin 3-vector, finite with |χ| ≤ 1."""
-    if np.ndim(chi) != 1:
+    if not _one_dimensional(chi):
         raise ValueError(f"{name} must be a 3-vector, got shape {np.shape(chi)}")
     x, y, z = _vec3(chi, name)
     m2 = x * x + y * y + z * z
@@ -110,7 +116,7 @@ def orthonormal_frame(ell_hat, n_hat, tol=1e-8):
     """(ℓ̂, n̂) checked to be unit and orthogonal within ``tol`` and then made exactly so."""
     vecs = []
     for name, a in (("ell_hat", ell_hat), ("n_hat", n_hat)):
-        if np.ndim(a) != 1:
+        if not _one_dimensional(a):
             raise ValueError(f"{name} must be a finite 3-vector, got {a!r}")
         x, y, z = _vec3(a, name)
         norm = math.sqrt(x * x + y * y + z * z)
