@@ -13,7 +13,9 @@ right-hand sides in :mod:`pnrotor.pn.system`:
   spin-orbit terms converted from Bohé et al.'s s_ℓ, σ_ℓ and the spin-spin terms from Sᵢ = Xᵢ²χᵢ;
 * products of such series (with spin products reduced to the invariant basis), the truncated series
   ratio used by TaylorT4/T5, and truncation by PN order *separately* for each power of the spins;
-* the numba evaluator :func:`eval_series` used inside the right-hand sides.
+* the numba evaluator :func:`eval_series` used inside the right-hand sides and events (the series stored
+  in their parameter vector by :func:`fold_and_store`, each behind a header of the powers of v that hold
+  spin and logarithmic terms, so that the evaluation skips the rest), which gives v dS/dv with S.
 
 Spin-invariant basis (χᵢ the dimensionless spins, ℓ̂ the orbital angular momentum direction)::
 
@@ -45,6 +47,8 @@ from numba import njit
 NK = 10  # powers v^0 … v^9 (through 4.5PN)
 NB = 9   # spin-invariant basis, see module docstring
 NL = 2   # powers of ln v: 0 and 1
+SERIES_HEADER = 5  # (n, s₀, s₁, l₀, l₁) before a series stored in p, see fold_and_store
+SERIES_SLOTS = SERIES_HEADER + NK * NB * NL
 
 B_ONE, B_A1, B_A2, B_S12, B_A1A2, B_S11, B_A1A1, B_S22, B_A2A2 = range(NB)
 BASIS_NAMES = ("1", "l.chi1", "l.chi2", "chi1.chi2", "(l.chi1)(l.chi2)", "chi1.chi1", "(l.chi1)^2",
@@ -227,10 +231,12 @@ def eval_at(C, v, basis):
 @njit(cache=True)
 def fold_and_store(C, basis, fold, p, off):
     """Write C (optionally contracted with the fixed invariants ``basis`` into column b = 0, see
-    :func:`fold_basis`) flat into p[off:] and return 1 + its highest nonzero power of v."""
+    :func:`fold_basis`) into p[off:] as :func:`eval_series` reads it: the header (n, s₀, s₁, l₀, l₁),
+    then C flat.  n = 1 + the highest nonzero power of v; the powers with a nonzero spin term (b ≥ 1)
+    are s₀ ≤ k < s₁ without ln v and l₀ ≤ k < l₁ with it (0, 0 if none)."""
     n = 0
+    s0 = s1 = l0 = l1 = 0
     for k in range(C.shape[0]):
-        nonzero = False
         for b in range(C.shape[1]):
             for l in range(C.shape[2]):
                 if fold:
@@ -240,12 +246,18 @@ def fold_and_store(C, basis, fold, p, off):
                             val += basis[bb] * C[k, bb, l]
                 else:
                     val = C[k, b, l]
-                p[off + (k * C.shape[1] + b) * C.shape[2] + l] = val
+                p[off + SERIES_HEADER + (k * C.shape[1] + b) * C.shape[2] + l] = val
                 if val != 0.0:
-                    nonzero = True
-        if nonzero:
-            n = k + 1
-    return n
+                    n = k + 1
+                    if b > 0 and l == 0:
+                        s0, s1 = (s0 if s1 else k), k + 1
+                    elif b > 0:
+                        l0, l1 = (l0 if l1 else k), k + 1
+    p[off] = n
+    p[off + 1] = s0
+    p[off + 2] = s1
+    p[off + 3] = l0
+    p[off + 4] = l1
 
 
 def fold_basis(C, basis_values):
@@ -285,39 +297,30 @@ def evaluate(C, v, basis):
     return out
 
 
-def last_nonzero_power(C):
-    """1 + the largest k with a nonzero coefficient (number of Horner terms needed); 0 if C == 0."""
-    nz = np.flatnonzero(C.reshape(C.shape[0], -1).any(axis=1))
-    return int(nz[-1]) + 1 if nz.size else 0
-
-
 @njit(cache=True, inline="always")
-def eval_series(p, off, nk, v, lnv, b1, b2, b3, b4, b5, b6, b7, b8):
-    """Σ_{k<nk} v^k Σ_b B_b (C[k,b,0] + C[k,b,1] ln v) for C stored flat at p[off:] (Horner in v).
+def eval_series(p, off, v, lnv, spins, b1, b2, b3, b4, b5, b6, b7, b8):
+    """(S, v dS/dv) at v for S = Σ_k v^k Σ_b B_b (C[k,b,0] + C[k,b,1] ln v) stored at p[off:] by
+    :func:`fold_and_store`; ``lnv`` = ln v, B_0 = 1 and b1…b8 the other eight invariants (module docstring).
 
-    B_0 = 1 and b1…b8 are the other eight invariants of the basis (module docstring).
+    Each power k < n is contracted with the basis once into c_k + c_L,k ln v, its spin terms only where
+    the header has them (s₀ ≤ k < s₁, and l₀ ≤ k < l₁ for those with ln v); ``spins=False``, for a series
+    folded into b = 0 at setup, compiles them away.  Both sums are Horner's: S ← S v + c_k + c_L,k ln v
+    and, for v dS/dv = Σ_k v^k [k (c_k + c_L,k ln v) + c_L,k], e ← (e + S) v + c_L,k (S before its update).
+    A caller that uses only S leaves e to the compiler to drop.
     """
+    n, s0, s1, l0, l1 = int(p[off]), int(p[off + 1]), int(p[off + 2]), int(p[off + 3]), int(p[off + 4])
     acc = 0.0
-    for k in range(nk - 1, -1, -1):
-        o = off + k * (NB * NL)
-        ck = ((p[o] + p[o + 1] * lnv)
-              + b1 * (p[o + 2] + p[o + 3] * lnv)
-              + b2 * (p[o + 4] + p[o + 5] * lnv)
-              + b3 * (p[o + 6] + p[o + 7] * lnv)
-              + b4 * (p[o + 8] + p[o + 9] * lnv)
-              + b5 * (p[o + 10] + p[o + 11] * lnv)
-              + b6 * (p[o + 12] + p[o + 13] * lnv)
-              + b7 * (p[o + 14] + p[o + 15] * lnv)
-              + b8 * (p[o + 16] + p[o + 17] * lnv))
-        acc = acc * v + ck
-    return acc
-
-
-@njit(cache=True, inline="always")
-def eval_series0(p, off, nk, v, lnv):
-    """Like :func:`eval_series` for a series with only the spin-independent column b = 0."""
-    acc = 0.0
-    for k in range(nk - 1, -1, -1):
-        o = off + k * (NB * NL)
-        acc = acc * v + (p[o] + p[o + 1] * lnv)
-    return acc
+    dacc = 0.0
+    for k in range(n - 1, -1, -1):
+        o = off + SERIES_HEADER + k * (NB * NL)
+        c = p[o]
+        cl = p[o + 1]
+        if spins and k < s1 and k >= s0:
+            c += (b1 * p[o + 2] + b2 * p[o + 4] + b3 * p[o + 6] + b4 * p[o + 8] + b5 * p[o + 10]
+                  + b6 * p[o + 12] + b7 * p[o + 14] + b8 * p[o + 16])
+        if spins and k < l1 and k >= l0:
+            cl += (b1 * p[o + 3] + b2 * p[o + 5] + b3 * p[o + 7] + b4 * p[o + 9] + b5 * p[o + 11]
+                   + b6 * p[o + 13] + b7 * p[o + 15] + b8 * p[o + 17])
+        dacc = (dacc + acc) * v + cl
+        acc = acc * v + (c + cl * lnv)
+    return acc, dacc
