@@ -318,3 +318,21 @@ def test_test_mass_flux_matches_tagoshi_sasaki():
     assert flog[8] == pytest.approx(232597 / 4410, rel=1e-15)
     assert f[9] == pytest.approx(math.pi * (265978667519 / 745113600 - 6848 * GAMMA / 105 - 13696 * ln2 / 105), rel=1e-13)
     assert flog[9] == pytest.approx(-6848 * math.pi / 105, rel=1e-15)
+
+
+@pytest.mark.parametrize("approximant", ["T1", "T4", "T5"])
+def test_spin_independent_parts_of_a_population_are_bitwise_those_of_each_binary(approximant):
+    """evolve_many builds the mass-ratio parts of p for many binaries in one pass of numpy; each row must be
+    bitwise what one binary's Python floats give (a power written x ** k would differ: numpy's is not libm's
+    pow on CPUs with AVX-512), else evolve_many and evolve would part."""
+    rng = np.random.default_rng(11)
+    X1 = rng.uniform(0.5, 0.995, 400)
+    k1, k2 = rng.uniform(1.0, 20.0, 400), rng.uniform(1.0, 20.0, 400)
+    kmax = kmax_from_orders(3.5, 3.5, 3.0)
+    for rotor, shift, omega_l in (("coprecessing", True, "torque"), ("orbital", False, "varpi")):
+        many = system.spin_independent_parts(X1, k1, k2, approximant, kmax, 3.5, 3.0, rotor, shift, omega_l)
+        for i in range(0, 400, 7):
+            one = system.spin_independent_parts(float(X1[i]), float(k1[i]), float(k2[i]), approximant, kmax, 3.5,
+                                                3.0, rotor, shift, omega_l)
+            for a, b in zip(one, many):
+                np.testing.assert_array_equal(a[0], b[i])

@@ -190,3 +190,20 @@ def test_refused_targets_leave_the_others():
 def test_bad_frequency_lists_raise(kwargs, match):
     with pytest.raises(ValueError, match=match):
         evolve_many([30.0, 20.0], [10.0, 10.0], [0, 0, 0], [0, 0, 0], 20.0, **kwargs)
+
+
+def test_per_binary_kappas_and_chunks_equal_single_evolve(monkeypatch):
+    """Spin-induced quadrupoles differing per binary (the spin-independent parameters are built for a chunk of
+    binaries at once, elementwise), and a table split into chunks of 5: still each binary's own evolve."""
+    import pnrotor.pn.many as many
+    monkeypatch.setattr(many, "CHUNK", 5)
+    table = _table(12, 7)
+    kappa1, kappa2 = np.linspace(1.0, 12.0, 12), np.linspace(20.0, 2.0, 12)
+    pop = evolve_many(*table[:4], 20.0, ell_hat=table[4], n_hat=table[5], kappa1=kappa1, kappa2=kappa2)
+    m1, m2, c1, c2, ell, nh = table
+    for i in range(12):
+        e = evolve(m1[i], m2[i], c1[i], c2[i], 20.0, ell_hat=ell[i], n_hat=nh[i], kappa1=kappa1[i], kappa2=kappa2[i],
+                   sampling="final")
+        assert pop.t[i] == e.t[-1] and pop.termination[i] == e.termination
+        for k in FIELDS:
+            np.testing.assert_array_equal(getattr(pop, k)[i], getattr(e, k)[-1], err_msg=f"binary {i}, {k}")

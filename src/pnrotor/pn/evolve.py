@@ -170,9 +170,10 @@ class System:
     basis: np.ndarray
 
 
-def build_system(s):
+def build_system(s, parts=None):
     """The :class:`System` of :class:`~pnrotor.pn.settings.Settings` ``s``; a ValueError if f_ref is at or
-    past the end of the inspiral (the terminal events only fire on crossing zero, so none may start there)."""
+    past the end of the inspiral (the terminal events only fire on crossing zero, so none may start there).
+    ``parts``: the binary's row of :func:`pnrotor.pn.system.spin_independent_parts`, if already built."""
     kmax = kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order)
     c1, c2, ell = s.chi1, s.chi2, s.ell_hat
     (x1, y1, z1), (x2, y2, z2), (lx, ly, lz) = c1.tolist(), c2.tolist(), ell.tolist()   # floats: cheaper than np.dot
@@ -181,8 +182,8 @@ def build_system(s):
     p, at_v0 = _sys.make_parameters(
         s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
         kappa2=s.kappa2, v_end=s.v_max, rotor=s.rotor, phase_shift=s.precession_phase_shift,
-        aligned_basis=bvals if s.use_aligned else None,
-        omega_l="varpi" if s.precession == "averaged_varpi" else "torque", basis=bvals, v_check=s.v0)
+        aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
+        parts=parts)
     _check_start(s, kmax, bvals, *at_v0)
     if s.use_aligned:
         rhs, events = _sys.rhs_aligned, _sys.events_aligned
@@ -193,6 +194,19 @@ def build_system(s):
         y0 = np.concatenate(([s.v0], c1, c2, s.R0, [0.0]))
     # they cannot raise (error_model='numpy'), so they may go to the integrator by address
     return System(by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG), p, y0, kmax, bvals)
+
+
+def _omega_l(s):
+    return "varpi" if s.precession == "averaged_varpi" else "torque"
+
+
+def population_parts(s, X1, kappa1, kappa2):
+    """:func:`pnrotor.pn.system.spin_independent_parts` of binaries with the model options of settings ``s``
+    and arrays X1, κ₁, κ₂ (row i is what :func:`build_system` takes as ``parts`` for binary i)."""
+    return _sys.spin_independent_parts(X1, kappa1, kappa2, s.approximant,
+                                       kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order),
+                                       s.spin_orbit_order, s.spin_spin_order, s.rotor, s.precession_phase_shift,
+                                       _omega_l(s))
 
 
 def _check_start(s, kmax, bvals, n0, d0, e0, peak0):

@@ -37,12 +37,16 @@ from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NST
                           STATUS_EVENT, _crossed, _dop853_core, _locate_root, no_after_step)
 from ..ode.result import contd8
 from . import initial as _ini
-from .evolve import _CONTROLLER, TERMINATION_MESSAGES, _tolerances, build_system, half, termination
+from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _tolerances, build_system, half, population_parts,
+                     termination)
 from .sampling import _fill_history, output_mode
 from .settings import V_MIN, settings
 from .system import EV_V_END, N_EVENTS, P_VEND
 
 __all__ = ["evolve_many", "Population"]
+
+CHUNK = 4096
+"""Binaries prepared and integrated together: bounds the memory of their parameter vectors (~10 kB each)."""
 
 
 
@@ -182,6 +186,28 @@ def _target_table(f_end, frequencies, n):
     return np.ascontiguousarray(f), True
 
 
+def _integrate_groups(groups, atol, rtol, max_steps, out, counts):
+    """Each group of halves {(rhs, events, output mode, state size): [(row of the farthest end, y0, p, t_end,
+    event directions, settings, [(v, row) of the nearer targets])]} integrated by :func:`_integrate_all` into
+    the rows of ``out`` and ``counts``."""
+    after_step = by_address(no_after_step, AFTER_STEP_SIG)
+    for (rhs, events, mode, size), members in groups.items():
+        atol_a, rtol_a = _tolerances(size, atol, rtol)
+        rows, y0, p, t_end, directions, ss, nearer = zip(*members)
+        width = max(len(x) for x in nearer)
+        near_r = np.full((len(members), width), -1, dtype=np.int64)
+        near_vk = np.full((len(members), width), np.nan)
+        for j, x in enumerate(nearer):
+            for q, (vk, r) in enumerate(x):
+                near_vk[j, q], near_r[j, q] = vk, r
+        _integrate_all(rhs, after_step, events, np.array(y0), np.array(p), np.array(t_end), np.array(directions),
+                       atol_a, rtol_a, max_steps, *_CONTROLLER, mode,
+                       np.array([s.R0 for s in ss]), np.array([s.ell_hat for s in ss]),
+                       np.array([s.chi1 for s in ss]), np.array([s.chi2 for s in ss]),
+                       np.array(rows, dtype=np.int64), near_vk, near_r, out.t, out.v, out.Phi, out.chi1, out.chi2,
+                       out.R, out.ell_hat, counts, np.empty(0), OUT_FINAL)
+
+
 def _refused_targets(f, m1, m2, f_ref):
     """{k: message} of the listed frequencies that ``evolve`` would refuse as f_max or f_min for a binary it
     accepts: f_ref itself, and those outside the PN range (v > 1 or v < V_MIN, the checks of
@@ -255,9 +281,8 @@ integrate_rotor, precession, max_steps
                   precession=precession, max_steps=max_steps)
     # the shared options fail for every binary alike: check them once, with a reference binary (a binary of the
     # table could itself be invalid, which must not raise)
-    approximant = settings(10.0, 10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 20.0, f_min=None, f_max=None,
-                           ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0,
-                           **shared).approximant
+    reference = settings(10.0, 10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 20.0, f_min=None, f_max=None,
+                         ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, **shared)
 
     # one row per (binary, target), row i·K + k; reshaped to (N, K) at the end
     nr = n * K
@@ -267,61 +292,52 @@ integrate_rotor, precession, max_steps
                      termination=np.full(nr, "invalid", dtype=object), message=np.full(nr, "", dtype=object),
                      nsteps=np.zeros(nr, dtype=np.int64), nfev=np.zeros(nr, dtype=np.int64),
                      inputs={k: v for k, v in shared.items() if k != "sampling"})
-    groups, ends, M_sec = {}, [None] * nr, np.full(nr, np.nan)
+    ends, M_sec, counts = [None] * nr, np.full(nr, np.nan), np.zeros((nr, 4), dtype=np.int64)
+    with np.errstate(all="ignore"):   # an invalid binary's row is never used: settings refuses it first
+        X1 = m1a / (m1a + m2a)
     # per binary in Python floats and lists: numpy on a few numbers costs ~0.5-1 µs per operation
     f_all, m1l, m2l, frl, k1l, k2l, c1l, c2l, elll, nhl = (x.tolist() for x in (targets, m1a, m2a, fref, k1, k2, c1,
                                                                                 c2, ell, nh))
-    for i in range(n):
-        f, fr = f_all[i], frl[i]
-        skip = _refused_targets(f, m1l[i], m2l[i], fr) if listed else {}
-        kept = [k for k in range(K) if k not in skip]
-        behind = [k for k in kept if f[k] < fr]
-        ahead = [k for k in kept if not f[k] < fr]       # NaN (f_end mode: to the end of the inspiral) goes forward
-        f_ahead = [f[k] for k in ahead if f[k] == f[k]]
-        try:
-            s = settings(m1l[i], m2l[i], c1l[i], c2l[i], fr, f_min=min(f[k] for k in behind) if behind else None,
-                         f_max=max(f_ahead) if f_ahead else None, ell_hat=elll[i], n_hat=nhl[i], kappa1=k1l[i],
-                         kappa2=k2l[i], **shared)
-            system = build_system(s)
-        except ValueError as e:
-            out.message[i * K:(i + 1) * K] = str(e)
-            continue
-        for k, why in skip.items():
-            out.message[i * K + k] = why
-        M_sec[i * K:(i + 1) * K] = s.M_sec
-        for forward, ks in ((True, ahead), (False, behind)):
-            if not ks:
+    for start in range(0, n, CHUNK):
+        stop = min(start + CHUNK, n)
+        with np.errstate(all="ignore"):
+            parts = population_parts(reference, X1[start:stop], k1[start:stop], k2[start:stop])
+        groups = {}
+        for i in range(start, stop):
+            f, fr = f_all[i], frl[i]
+            skip = _refused_targets(f, m1l[i], m2l[i], fr) if listed else {}
+            kept = [k for k in range(K) if k not in skip]
+            behind = [k for k in kept if f[k] < fr]
+            ahead = [k for k in kept if not f[k] < fr]    # NaN (f_end mode: to the end of the inspiral) goes forward
+            f_ahead = [f[k] for k in ahead if f[k] == f[k]]
+            try:
+                s = settings(m1l[i], m2l[i], c1l[i], c2l[i], fr, f_min=min(f[k] for k in behind) if behind else None,
+                             f_max=max(f_ahead) if f_ahead else None, ell_hat=elll[i], n_hat=nhl[i],
+                             kappa1=k1l[i], kappa2=k2l[i], **shared)
+                system = build_system(s, tuple(x[i - start] for x in parts))
+            except ValueError as e:
+                out.message[i * K:(i + 1) * K] = str(e)
                 continue
-            p, t_end, directions, end = half(s, system, forward)
-            # the farthest target ends the integration; the others are found on its dense output
-            v_k = sorted((_ini.v_from_frequency(f[k], s.M_sec), i * K + k) for k in ks)
-            if not forward:
-                v_k.reverse()
-            for _, r in v_k:
-                ends[r] = end
-            key = (system.rhs, system.events, output_mode(s), system.y0.size)
-            groups.setdefault(key, []).append((v_k[-1][1], system.y0, p, t_end, directions, s, v_k[:-1]))
-    counts = np.zeros((nr, 4), dtype=np.int64)
-    after_step = by_address(no_after_step, AFTER_STEP_SIG)
-    for (rhs, events, mode, size), members in groups.items():
-        atol_a, rtol_a = _tolerances(size, float(atol), float(rtol))
-        rows, y0, p, t_end, directions, ss, nearer = zip(*members)
-        width = max(len(x) for x in nearer)
-        near_r = np.full((len(members), width), -1, dtype=np.int64)
-        near_vk = np.full((len(members), width), np.nan)
-        for j, x in enumerate(nearer):
-            for q, (vk, r) in enumerate(x):
-                near_vk[j, q], near_r[j, q] = vk, r
-        _integrate_all(rhs, after_step, events, np.array(y0), np.array(p), np.array(t_end), np.array(directions),
-                       atol_a, rtol_a, int(max_steps), *_CONTROLLER, mode,
-                       np.array([s.R0 for s in ss]), np.array([s.ell_hat for s in ss]),
-                       np.array([s.chi1 for s in ss]), np.array([s.chi2 for s in ss]),
-                       np.array(rows, dtype=np.int64), near_vk, near_r, out.t, out.v, out.Phi, out.chi1, out.chi2,
-                       out.R, out.ell_hat, counts, np.empty(0), OUT_FINAL)
+            for k, why in skip.items():
+                out.message[i * K + k] = why
+            M_sec[i * K:(i + 1) * K] = s.M_sec
+            for forward, ks in ((True, ahead), (False, behind)):
+                if not ks:
+                    continue
+                p, t_end, directions, end = half(s, system, forward)
+                # the farthest target ends the integration; the others are found on its dense output
+                v_k = sorted((_ini.v_from_frequency(f[k], s.M_sec), i * K + k) for k in ks)
+                if not forward:
+                    v_k.reverse()
+                for _, r in v_k:
+                    ends[r] = end
+                key = (system.rhs, system.events, output_mode(s), system.y0.size)
+                groups.setdefault(key, []).append((v_k[-1][1], system.y0, p, t_end, directions, s, v_k[:-1]))
+        _integrate_groups(groups, float(atol), float(rtol), int(max_steps), out, counts)
     for r in range(nr):
         if ends[r] is not None:
             status, event = counts[r, :2]
-            out.termination[r] = termination(status, event, ends[r], approximant)
+            out.termination[r] = termination(status, event, ends[r], reference.approximant)
             out.message[r] = TERMINATION_MESSAGES[out.termination[r]]
     out.nsteps[:], out.nfev[:] = counts[:, 2], counts[:, 3]
     out.t_seconds[:] = out.t * M_sec

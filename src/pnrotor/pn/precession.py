@@ -75,10 +75,10 @@ def spin_orbit_precession(X_i, X_j):
     # LO:   3/4 + ν/2 − 3δ/4                                            [Bohé+ 2013, Eq. (4.5)]
     s0 = 0.75 + 0.5 * nu - 0.75 * d
     # NLO:  9/16 + 5ν/4 − ν²/24 + δ(−9/16 + 5ν/8)                       [Bohé+ 2013, Eq. (4.5)]
-    s2 = 9.0 / 16.0 + 1.25 * nu - nu ** 2 / 24.0 + d * (-9.0 / 16.0 + 0.625 * nu)
+    s2 = 9.0 / 16.0 + 1.25 * nu - (nu * nu) / 24.0 + d * (-9.0 / 16.0 + 0.625 * nu)
     # NNLO: 27/32 + 3ν/16 − 105ν²/32 − ν³/48 + δ(−27/32 + 39ν/8 − 5ν²/32)   [Bohé+ 2013, Eq. (4.5)]
-    s4 = (27.0 / 32.0 + 3.0 * nu / 16.0 - 105.0 * nu ** 2 / 32.0 - nu ** 3 / 48.0
-          + d * (-27.0 / 32.0 + 39.0 * nu / 8.0 - 5.0 * nu ** 2 / 32.0))
+    s4 = (27.0 / 32.0 + 3.0 * nu / 16.0 - 105.0 * (nu * nu) / 32.0 - (nu * nu * nu) / 48.0
+          + d * (-27.0 / 32.0 + 39.0 * nu / 8.0 - 5.0 * (nu * nu) / 32.0))
     return s0, s2, s4
 
 
@@ -88,7 +88,7 @@ def spin_spin_precession_2pn(X_i, X_j, kappa_i):
     Instantaneous: v⁶ [Xⱼ²(−χⱼ + 3(n̂·χⱼ)n̂) + 3νκᵢ(n̂·χᵢ)n̂]   [Kidder 1995, Eq. (2.4); Racine 2008, Eq. (2.7)]
     """
     nu = X_i * X_j
-    return -X_j ** 2, 1.5 * X_j ** 2, 1.5 * nu * kappa_i
+    return -(X_j * X_j), 1.5 * (X_j * X_j), 1.5 * nu * kappa_i
 
 
 def spin_spin_precession_3pn(X_i, X_j, kappa_i):
@@ -117,8 +117,8 @@ def spin_spin_precession_3pn_instantaneous(X_i, X_j, kappa_i):
     c_iv = 3.0 - 1.5 * m - 1.5 / m
     q_n = 3.0 * (0.5 / m + 1.0 - m - 0.5 * m * m)
     q_v = 3.0 * (1.0 / m - 1.0)
-    xj2 = X_j ** 2
-    xi2 = X_i ** 2
+    xj2 = (X_j * X_j)
+    xi2 = (X_i * X_i)
     return (c_s * xj2, c_sn * xj2, c_sv * xj2, (c_in + kappa_i * q_n) * xi2, (c_iv + kappa_i * q_v) * xi2)
 
 
@@ -139,9 +139,9 @@ def varpi_coefficients(X_i, X_j):
     # coefficient of (n̂·χᵢ) in δΣ_n: δ·(−X₁) for body 1, δ·(+X₂) for body 2; δ = X₁ − X₂
     # For body i this is −(Xᵢ − Xⱼ)Xᵢ in both cases.
     dsig = -(X_i - X_j) * X_i
-    a = (7.0 * X_i ** 2 + 3.0 * dsig,
-         (-10.0 - 29.0 * nu / 3.0) * X_i ** 2 + (-6.0 - 4.5 * nu) * dsig,
-         (1.5 + 59.0 * nu / 4.0 + 52.0 * nu ** 2 / 9.0) * X_i ** 2 + (1.5 + 73.0 * nu / 8.0 + 17.0 * nu ** 2 / 6.0) * dsig)
+    a = (7.0 * (X_i * X_i) + 3.0 * dsig,
+         (-10.0 - 29.0 * nu / 3.0) * (X_i * X_i) + (-6.0 - 4.5 * nu) * dsig,
+         (1.5 + 59.0 * nu / 4.0 + 52.0 * (nu * nu) / 9.0) * (X_i * X_i) + (1.5 + 73.0 * nu / 8.0 + 17.0 * (nu * nu) / 6.0) * dsig)
     g2 = 1.0 - nu / 3.0
     g4 = 1.0 - 65.0 * nu / 12.0
     return a[0], a[1] + g2 * a[0], a[2] + g2 * a[1] + g4 * a[0]
@@ -149,7 +149,7 @@ def varpi_coefficients(X_i, X_j):
 
 def angular_momentum_coefficients(nu):
     """(L₂, L₄) of |L| = (ν/v)(1 + L₂v² + L₄v⁴).   Blanchet 2014, Eq. (234); Bohé+ 2013, Eq. (4.7)."""
-    return 1.5 + nu / 6.0, 27.0 / 8.0 - 19.0 / 8.0 * nu + nu ** 2 / 24.0
+    return 1.5 + nu / 6.0, 27.0 / 8.0 - 19.0 / 8.0 * nu + (nu * nu) / 24.0
 
 
 def phase_shift_weights(X1, X2):

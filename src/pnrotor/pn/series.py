@@ -69,19 +69,21 @@ del _b
 MAX_ORDER = (NK - 1) / 2.0  # 4.5PN
 
 
-def new_series():
-    """A zero series C[k, b, l]."""
-    return np.zeros((NK, NB, NL))
+def new_series(shape=()):
+    """A zero series C[k, b, l], or one per binary, C[k, b, l, i] for the trailing ``shape`` (n,)."""
+    return np.zeros((NK, NB, NL) + tuple(shape))
 
 
 def assemble(X1, kappa1, kappa2, nonspinning, spin_orbit, spin_spin_per_body, spin1_spin2):
     """The untruncated series C of one PN quantity (Ê or F̂) in the χ basis, from its coefficient functions
     (:mod:`pnrotor.pn.energy`, :mod:`pnrotor.pn.flux`): ``nonspinning(ν)`` → (c, c_log) over k;
     ``spin_orbit(ν)`` → {k: (c_s, c_σ)} of s_ℓ and δσ_ℓ; ``spin_spin_per_body(Xᵢ, κᵢ)`` → {k: (c_SS, c_LL)}
-    of Sᵢ·Sᵢ and (ℓ̂·Sᵢ)²; ``spin1_spin2(ν)`` → {k: (c_S12, c_L12)} of S₁·S₂ and (ℓ̂·S₁)(ℓ̂·S₂)."""
+    of Sᵢ·Sᵢ and (ℓ̂·Sᵢ)²; ``spin1_spin2(ν)`` → {k: (c_S12, c_L12)} of S₁·S₂ and (ℓ̂·S₁)(ℓ̂·S₂).
+    For arrays X1, κ₁, κ₂ (one binary each) the series of every binary, C[k, b, l, i]: the coefficient
+    functions are elementwise, so each binary's numbers are those of a scalar call."""
     X2 = 1.0 - X1
     nu = X1 * X2
-    C = new_series()
+    C = new_series(np.shape(X1))
     c, clog = nonspinning(nu)
     C[:, B_ONE, 0] = c
     C[:, B_ONE, 1] = clog
@@ -104,14 +106,14 @@ def sl_sigma_to_basis(X1, X2, c_s, c_sigma):
 def add_spin_spin(C, X1, X2, per_body_1, per_body_2, s1s2):
     """Add orbit-averaged quadratic-in-spin terms, given in Sᵢ = Xᵢ²χᵢ units, to C in the χ basis."""
     for k, (c_ss, c_ll) in per_body_1.items():
-        C[k, B_S11, 0] += c_ss * X1 ** 4
-        C[k, B_A1A1, 0] += c_ll * X1 ** 4
+        C[k, B_S11, 0] += c_ss * (X1 * X1 * X1 * X1)
+        C[k, B_A1A1, 0] += c_ll * (X1 * X1 * X1 * X1)
     for k, (c_ss, c_ll) in per_body_2.items():
-        C[k, B_S22, 0] += c_ss * X2 ** 4
-        C[k, B_A2A2, 0] += c_ll * X2 ** 4
+        C[k, B_S22, 0] += c_ss * (X2 * X2 * X2 * X2)
+        C[k, B_A2A2, 0] += c_ll * (X2 * X2 * X2 * X2)
     for k, (c_s12, c_l12) in s1s2.items():
-        C[k, B_S12, 0] += c_s12 * X1 ** 2 * X2 ** 2
-        C[k, B_A1A2, 0] += c_l12 * X1 ** 2 * X2 ** 2
+        C[k, B_S12, 0] += c_s12 * (X1 * X1) * (X2 * X2)
+        C[k, B_A1A2, 0] += c_l12 * (X1 * X1) * (X2 * X2)
     return C
 
 
