@@ -11,7 +11,8 @@ aligned, precessing), sampled at Δt = 1/4096 s from f_start to the end of the i
 * pnrotor's default: the same evolution, ``modes(run)`` (ℓ ≤ 8, 3.5PN).
 
 Timings include the Python calls and freeing each call's own output; medians over interleaved rounds
-(LAL, ours, ours-default alternate case by case), robust on a shared machine.
+(LAL, ours, ours-default and the evolution alone alternate case by case), robust on a shared machine.  The
+last two columns are modes()' own cost per sample, (evolve + modes − evolve) / samples, in ns.
 
     python benchmarks/bench_modes.py [--rounds 7] [--cases NAME ...]
 """
@@ -59,28 +60,31 @@ def main():
     for name in args.cases:
         case = CASES[name]
         runs[name] = dict(samples=ours(case, ell_max=4, amplitude_order=1.5), lal_samples=lal_modes(case),
-                          lal=[], ours=[], full=[])
+                          lal=[], ours=[], full=[], evolve=[])
         ours(case)
     for _ in range(args.rounds):
         for name in args.cases:
             case, r = CASES[name], runs[name]
             for key, call in (("lal", lambda: lal_modes(case)),
                               ("ours", lambda: ours(case, ell_max=4, amplitude_order=1.5)),
-                              ("full", lambda: ours(case))):
+                              ("full", lambda: ours(case)),
+                              ("evolve", lambda: evolve(*case, sampling=DT, **orders))):
                 t = time.perf_counter()
                 call()
                 r[key].append(time.perf_counter() - t)
     print(f"LAL SpinTaylorT4 modes (l <= 4, 1.5PN) vs pnrotor evolve + modes; dt = 1/4096 s; "
           f"median of {args.rounds} interleaved rounds (ms)")
-    print(f"{'case':26s} {'samples':>8s} {'LAL':>8s} {'l<=4':>8s} {'ratio':>6s} {'l<=8,3.5':>9s} {'ratio':>6s}")
+    print(f"{'case':26s} {'samples':>8s} {'LAL':>8s} {'l<=4':>8s} {'ratio':>6s} {'l<=8,3.5':>9s} {'ratio':>6s} "
+          f"{'modes ns/sample l<=4, l<=8':>27s}")
     worst, worst_full = [], []
     for name, r in runs.items():
-        lal_ms, ours_ms, full_ms = (1e3 * statistics.median(r[k]) for k in ("lal", "ours", "full"))
+        lal_ms, ours_ms, full_ms, evolve_ms = (1e3 * statistics.median(r[k]) for k in ("lal", "ours", "full", "evolve"))
         worst.append(lal_ms / ours_ms)
         worst_full.append(lal_ms / full_ms)
+        per_sample = [1e6 * (ms - evolve_ms) / r["samples"] for ms in (ours_ms, full_ms)]
         print(f"{name:26s} {r['samples']:8d} {lal_ms:8.2f} {ours_ms:8.2f} {lal_ms / ours_ms:6.2f} {full_ms:9.2f} "
-              f"{lal_ms / full_ms:6.2f}" + ("" if abs(r["samples"] - r["lal_samples"]) <= 1
-                                            else f"  (LAL {r['lal_samples']} samples)"))
+              f"{lal_ms / full_ms:6.2f} {per_sample[0]:18.0f} {per_sample[1]:8.0f}"
+              + ("" if abs(r["samples"] - r["lal_samples"]) <= 1 else f"  (LAL {r['lal_samples']} samples)"))
     print(f"LAL / pnrotor, l <= 4 at 1.5PN: min {min(worst):.2f}, median {statistics.median(worst):.2f}; "
           f"pnrotor's default (l <= 8, 3.5PN): min {min(worst_full):.2f}, median {statistics.median(worst_full):.2f}")
 

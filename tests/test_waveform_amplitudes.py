@@ -26,7 +26,7 @@ def mode_flux_series(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0)):
     M = m1 + m2
     X1, X2 = m1 / M, m2 / M
     spins = bool(a1 or a2)
-    rows, ks, qs, cs = amplitudes.table(X1 * X2, X1 - X2, 8, order2, spins)
+    rows, ks, qs, cs, parities = amplitudes.table(X1 * X2, X1 - X2, 8, order2, spins)
     q = np.zeros(amplitudes.N_Q)
     q[0] = 1.0
     q[2 + 2] = X1 * X1 * a1 + X2 * X2 * a2                                   # S_ell
@@ -34,11 +34,13 @@ def mode_flux_series(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0)):
     q[8 + 2] = kappa[0] * X1 * X1 * a1 * a1 + 2 * X1 * X2 * a1 * a2 + kappa[1] * X2 * X2 * a2 * a2   # P_ellell
     A = np.zeros((len(ell_m(8)), 8), dtype=complex)
     B = np.zeros_like(A)
-    for row, k, qi, c in zip(rows, ks, qs, cs):
-        if qi == 1:
-            B[row, k] += c
-        else:
-            A[row, k] += c * q[qi]
+    for row, k, qi, c, parity in zip(rows, ks, qs, cs, parities):   # m ≥ 0; H_ℓ,−m from parity (−1)^ℓ H*_ℓm
+        ell, m = ell_m(8)[row]
+        for r, coef in ((row, c), (mode_index(ell, -m), parity * (-1) ** ell * np.conj(c)))[:2 if m else 1]:
+            if qi == 1:
+                B[r, k] += coef
+            else:
+                A[r, k] += coef * q[qi]
     f, flog = np.zeros(order2 + 1), np.zeros(order2 + 1)
     for row, (_, m) in enumerate(ell_m(8)):
         for k in range(8):

@@ -44,6 +44,16 @@ def test_aligned_run_in_a_tilted_frame_takes_the_general_rotation():
     assert np.max(np.abs(h.data - direct)) < 1e-12 * np.abs(direct).max()
 
 
+def test_one_pass_equals_amplitudes_then_rotation():
+    """modes() forms H block by block inside the rotation and skips the columns m' without terms (ℓ ≥ 5 has no
+    m' = 0, ℓ = 8 only even m'): the same as the whole H array rotated with every column."""
+    from pnrotor.waveform.wigner import rotate_modes
+    run = pnrotor.evolve(**PRECESSING, sampling="steps")
+    h = modes(run)
+    direct = rotate_modes(coorbital_modes(run.v, run.chi1, run.chi2, 30.0, 10.0, 8, 7, R=run.R), run.R, 8)
+    assert np.max(np.abs(h.data - direct)) < 1e-13 * np.abs(direct).max()
+
+
 def test_equal_mass_nonspinning_has_only_the_even_m_modes_the_amplitudes_allow():
     from pnrotor.waveform import nonspinning
     allowed = {(ell, s * m) for (ell, m) in nonspinning.terms(0.25, 0.0) for s in (1, -1) if m % 2 == 0}

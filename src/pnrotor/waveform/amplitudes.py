@@ -1,25 +1,42 @@
-r"""Co-orbital mode amplitudes H_ℓm at every sample: the terms of the sources, as one table, in numba.
+r"""Co-orbital mode amplitudes H_ℓm: the terms of the sources as one table, and the numba kernel that sums
+them and, in the same pass, takes them to the inertial frame.
 
 Every term of :mod:`~pnrotor.waveform.nonspinning` and :mod:`~pnrotor.waveform.spin` has the form
 h₀ v^k c q with h₀ = 8 √(π/5) ν v², a complex coefficient c fixed by the masses and q a real quantity
 of the sample (1, ln v, or one of the spin quantities of :data:`pnrotor.waveform.spin.BASIS`).  For a
-run, :func:`table` keeps the terms of the modes ℓ ≤ ell_max up to the amplitude order (k ≤ 2 × order),
-adds the m < 0 partners (H_ℓ,−m = ±(−1)^ℓ H*_ℓm, + for nonspinning and symmetric spin terms, − for
-the antisymmetric ones), and :func:`coorbital_modes` sums them per sample in one compiled pass: no
-term is evaluated for a mode or an order nobody asked for, and no spin quantity for a nonspinning run.
-For a precessing run the kernel also takes the spins from the inertial frame into the orbital frame of
-each sample's rotor R (χ' = R⁻¹ χ R) and writes H with each mode's samples contiguous, the layout
-:func:`pnrotor.waveform.wigner.rotate_modes` reads (else each sample's modes, for rotate_about_z).
+run, :func:`table` keeps the terms of the modes ℓ ≤ ell_max, m ≥ 0 up to the amplitude order
+(k ≤ 2 × order), each with its parity: H_ℓm = S_ℓm + A_ℓm, the sums of its symmetric and antisymmetric
+terms, and H_ℓ,−m = (−1)^ℓ (S_ℓm − A_ℓm)* (:mod:`~pnrotor.waveform.spin`; every nonspinning term is
+symmetric).  So only m ≥ 0 is summed, into separate real and imaginary rows (a coefficient's zero part is no
+term), S_ℓm in row ℓ + m and A_ℓm in row ℓ − m, which then become H_ℓm and H_ℓ,−m in place: no term is
+evaluated for a mode, an order or a spin quantity nobody asked for (none for a nonspinning run), and spins
+that are the same at every sample (aligned ones) are folded into the coefficients.
+
+:func:`_sum` runs over blocks of samples (``wigner._CHUNK``) with the samples innermost: per block v^k, ln v
+(only if a term needs it) and the spin quantities — for a precessing run of spins taken from the inertial
+frame into each sample's orbital frame, χ' = R⁻¹ χ R — then per ℓ the amplitudes and, without writing them
+out, the rotation to the inertial frame: H itself (co-orbital), H_ℓm e^{−imΦ} (a nonprecessing run in its
+own frame) or 𝔇(R) H (:func:`pnrotor.waveform.wigner._rotate_ell`, only the columns m' with terms).
+Measured (benchmarks/bench_modes.py, shared two-core machine), modes() per sample: precessing runs ~150 ns for
+ℓ ≤ 4 at 1.5PN and ~500–600 ns for ℓ ≤ 8 at 3.5PN, against ~400 and ~1,500 ns for amplitudes and rotation as
+two passes over an H array; nonprecessing runs ~40–100 and ~210–300 ns, against ~140–280 and ~500–700 ns.
+The kernel is one compiled function for every frame (~6 s to compile on a cold cache).  It holds the block
+functions of :mod:`~pnrotor.waveform.wigner` and :func:`pnrotor.quaternion.qrotate_into` (numba caches it per
+source file): after editing those, remove this module's ``__pycache__/amplitudes.*.nb*``.
 """
+
+from functools import lru_cache
 
 import numpy as np
 from numba import njit
 
 from pnrotor.quaternion import qrotate_into
 from pnrotor.waveform import nonspinning, spin
-from pnrotor.waveform.layout import mode_index, n_modes
+from pnrotor.waveform.layout import ell_m, mode_index, n_modes
+from pnrotor.waveform.wigner import (_CHUNK, _needed_elements, _phase_powers, _rotate_ell, _rotation_scratch,
+                                     _rotor_block, _store, d_table)
 
-__all__ = ["table", "coorbital_modes", "H0"]
+__all__ = ["table", "coorbital_modes", "modes_in_frame", "H0"]
 
 H0 = 8.0 * np.sqrt(np.pi / 5.0)
 """h₀ / (ν v²)."""
@@ -27,18 +44,19 @@ H0 = 8.0 * np.sqrt(np.pi / 5.0)
 _Q_ONE, _Q_LOG = 0, 1
 _Q_SPIN = {name: 2 + j for j, name in enumerate(spin.BASIS)}
 N_Q = 2 + len(spin.BASIS)
+_FRAME_CODES = {"coorbital": 0, "z": 1, "rotors": 2}
+"""The frames :func:`_sum` gives the modes in: H, H_ℓm e^{−imΦ} for R = exp(Φẑ/2), 𝔇(R) H."""
 
 
 def table(nu, delta, ell_max, order2, spins):
-    """(mode row, power k, quantity index, coefficient) arrays of every term kept (module docstring);
-    ``spins`` False leaves the spin terms out."""
+    """(mode row, power k, quantity index, coefficient, parity) arrays of every term kept, m ≥ 0 (module
+    docstring); ``spins`` False leaves the spin terms out."""
     rows = []
+    row_of = mode_index.py_func   # the plain Python function (a compiled call per term would cost ~1 µs)
 
     def add(ell, m, k, q, c, parity):
         if ell <= ell_max and k <= order2 and c != 0:
-            rows.append((mode_index(ell, m), k, q, complex(c)))
-            if m:
-                rows.append((mode_index(ell, -m), k, q, parity * (-1) ** ell * complex(c).conjugate()))
+            rows.append((row_of(ell, m), k, q, complex(c), parity))
 
     for (ell, m), series in nonspinning.terms(nu, delta).items():
         for k, a, b in series:
@@ -49,95 +67,202 @@ def table(nu, delta, ell_max, order2, spins):
         for parity, group in ((1, symmetric), (-1, antisymmetric)):
             for ell, m, k, name, c in group:
                 add(ell, m, k, _Q_SPIN[name], c, parity)
-    row, k, q, c = zip(*rows) if rows else ((), (), (), ())
+    row, k, q, c, parity = zip(*rows) if rows else ((), (), (), (), ())
     return (np.array(row, dtype=np.int64), np.array(k, dtype=np.int64), np.array(q, dtype=np.int64),
-            np.array(c, dtype=np.complex128))
+            np.array(c, dtype=np.complex128), np.array(parity, dtype=np.int64))
 
 
-@njit(cache=True)
-def _quantities(v, chi1, chi2, i, X1, X2, kappa1, kappa2, spins, out):
-    """The quantities q of sample i (1, ln v and the spin basis of :mod:`pnrotor.waveform.spin`) into out."""
-    out[0] = 1.0
-    out[1] = np.log(v[i])
-    if not spins:
-        return
-    c1, c2 = chi1[i], chi2[i]
+@lru_cache(maxsize=64)
+def _real_terms(nu, delta, ell_max, order2, spins, constants):
+    """:func:`table`'s terms as the kernel adds them: (ell_start, target, k, q, c, columns, needed), real terms
+    sorted by ℓ (those of ℓ are ell_start[ℓ] : ell_start[ℓ+1]), target the row of the block array (ℓ ± m for
+    the real part, 2 ell_max + 1 more for the imaginary part); the spin quantities q ≥ 2 folded into c if
+    ``constants`` gives their values (terms with equal target, k and q summed); columns[ℓ, m] whether H_ℓ,±m
+    has any term and needed the 𝔇 elements they use (:func:`pnrotor.waveform.wigner._needed_elements`).
+    Cached: a run's modes computed again (another ℓ_max, frame or distance) skip these ~0.1–0.3 ms."""
+    n_pow = 2 * ell_max + 1
+    labels = ell_m(ell_max)
+    summed = {}
+    for row, k, q, c, parity in zip(*(column.tolist() for column in table(nu, delta, ell_max, order2, spins))):
+        ell, m = labels[row]
+        if constants is not None and q >= 2:
+            c, q = c * constants[q], _Q_ONE
+        r = ell + m if parity > 0 else ell - m
+        for part, value in ((0, c.real), (n_pow, c.imag)):
+            if value:
+                key = (ell, part + r, k, q)
+                summed[key] = summed.get(key, 0.0) + value
+    keys = sorted(key for key, value in summed.items() if value)
+    ell, target, k, q = (np.array(column, dtype=np.int64).reshape(-1) for column in zip(*keys)) if keys else \
+        (np.zeros(0, dtype=np.int64),) * 4
+    columns = np.zeros((ell_max + 1, ell_max + 1), dtype=np.bool_)
+    columns[ell, np.abs(target % n_pow - ell)] = True
+    return (np.searchsorted(ell, np.arange(ell_max + 2)), target, k, q, np.array([summed[key] for key in keys]),
+            columns, _needed_elements(columns, ell_max))
+
+
+@njit(cache=True, fastmath={"contract"})
+def _add_term(x, c, p, q, nb):
+    """x += c p q (a loop of its own, as the block loops of :mod:`pnrotor.waveform.wigner`)."""
+    for s in range(nb):
+        x[s] += c * p[s] * q[s]
+
+
+@njit(cache=True, fastmath={"contract"})
+def _spin_block(chi, nb, X1, X2, kappa1, kappa2, Q):
+    """Rows 2 … of Q: the spin basis of :mod:`pnrotor.waveform.spin` from the rows χ₁ₙ, χ₁λ, χ₁ℓ, χ₂ₙ, χ₂λ, χ₂ℓ
+    of chi, for nb samples."""
     for a in range(3):
-        out[2 + a] = X1 * X1 * c1[a] + X2 * X2 * c2[a]
-        out[5 + a] = X2 * c2[a] - X1 * c1[a]
-        out[8 + a] = kappa1 * X1 * X1 * c1[a] * c1[a] + 2.0 * X1 * X2 * c1[a] * c2[a] + kappa2 * X2 * X2 * c2[a] * c2[a]
+        for s in range(nb):
+            c1, c2 = chi[a, s], chi[3 + a, s]
+            Q[2 + a, s] = X1 * X1 * c1 + X2 * X2 * c2
+            Q[5 + a, s] = X2 * c2 - X1 * c1
+            Q[8 + a, s] = kappa1 * X1 * X1 * c1 * c1 + 2.0 * X1 * X2 * c1 * c2 + kappa2 * X2 * X2 * c2 * c2
     j = 11
     for a in range(3):
         for b in range(a + 1, 3):   # (n, λ), (n, ℓ), (λ, ℓ)
-            out[j] = 2.0 * (kappa1 * X1 * X1 * c1[a] * c1[b] + X1 * X2 * (c1[a] * c2[b] + c1[b] * c2[a])
-                            + kappa2 * X2 * X2 * c2[a] * c2[b])
+            for s in range(nb):
+                Q[j, s] = 2.0 * (kappa1 * X1 * X1 * chi[a, s] * chi[b, s]
+                                 + X1 * X2 * (chi[a, s] * chi[3 + b, s] + chi[b, s] * chi[3 + a, s])
+                                 + kappa2 * X2 * X2 * chi[3 + a, s] * chi[3 + b, s])
             j += 1
 
 
+@njit(cache=True, fastmath={"contract"})
+def _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, X1, X2, kappa1, kappa2, p, Q, chi, c):
+    """Of samples i0 … i0+nb−1: p[k] = h₀ v^k, Q[1] = ln v if ``logs``, and with ``spins`` (1: co-orbital
+    components given, 2: inertial ones, taken into the frame of R) the spin basis (chi: block scratch, c: (3,))."""
+    for s in range(nb):
+        vi = v[i0 + s]
+        p[0, s] = h0 * vi * vi
+    for k in range(1, p.shape[0]):
+        for s in range(nb):
+            p[k, s] = p[k - 1, s] * v[i0 + s]
+    if logs:
+        for s in range(nb):
+            Q[1, s] = np.log(v[i0 + s])
+    if not spins:
+        return
+    for s in range(nb):
+        i = i0 + s
+        for body in range(2):
+            x = chi1[i] if body == 0 else chi2[i]
+            if spins == 2:
+                qrotate_into(R[i, 0], -R[i, 1], -R[i, 2], -R[i, 3], x, c)   # χ' = R⁻¹ χ R
+                chi[3 * body, s], chi[3 * body + 1, s], chi[3 * body + 2, s] = c[0], c[1], c[2]
+            else:
+                chi[3 * body, s], chi[3 * body + 1, s], chi[3 * body + 2, s] = x[0], x[1], x[2]
+    _spin_block(chi, nb, X1, X2, kappa1, kappa2, Q)
+
+
+@njit(cache=True, fastmath={"contract"})
+def _ell_amplitudes(ell, lo, hi, target, k, q, c, p, Q, e_re, e_im, X, nb):
+    """Rows ℓ + m of X (real parts; imaginary parts 2 ell_max + 1 rows further) = e^{−imφ} H_ℓm of the block for
+    the phase factors e^{−iφ}, e^{−2iφ}, … in rows 1, 2, … of (e_re, e_im), from the real terms lo … hi−1: S_ℓm
+    and A_ℓm summed into rows ℓ + m and ℓ − m, then (:func:`_mirror`) H_ℓm = S + A, H_ℓ,−m = (−1)^ℓ (S − A)*
+    with their phases in place."""
+    n = X.shape[0] // 2
+    for r in range(2 * ell + 1):
+        for s in range(nb):
+            X[r, s] = X[n + r, s] = 0.0
+    for j in range(lo, hi):
+        _add_term(X[target[j]], c[j], p[k[j]], Q[q[j]], nb)
+    sig = 1.0 - 2.0 * (ell % 2)
+    for m in range(1, ell + 1):
+        _mirror(X[ell + m], X[n + ell + m], X[ell - m], X[n + ell - m], e_re[m], e_im[m], sig, nb)
+
+
+@njit(cache=True, fastmath={"contract"})
+def _mirror(h_re, h_im, hn_re, hn_im, e_re, e_im, sig, nb):
+    """(h, hn) = (e (S + A), e* sig (S − A)*) = (U + V, sig (U − V)*) with U = e S, V = e A, from (S, A) = (h, hn),
+    complex numbers as (re, im) rows (a loop of its own: LLVM vectorizes it here, not inline)."""
+    for s in range(nb):
+        er, ei, sr, si, ar, ai = e_re[s], e_im[s], h_re[s], h_im[s], hn_re[s], hn_im[s]
+        ur, ui, vr, vi = er * sr - ei * si, er * si + ei * sr, er * ar - ei * ai, er * ai + ei * ar
+        h_re[s], h_im[s] = ur + vr, ui + vi
+        hn_re[s], hn_im[s] = sig * (ur - vr), sig * (vi - ui)
+
+
 @njit(cache=True)
-def _sum_terms(v, chi1, chi2, nu, X1, X2, kappa1, kappa2, spins, row, k, q, c, H):
-    quantities = np.empty(N_Q)
-    powers = np.empty(8)
-    for i in range(v.size):
-        _quantities(v, chi1, chi2, i, X1, X2, kappa1, kappa2, spins, quantities)
-        _add_terms(v[i], nu, quantities, powers, row, k, q, c, H, i)
-
-
-@njit(cache=True, inline="always")
-def _add_terms(vi, nu, quantities, powers, row, k, q, c, H, i):
-    """H[i, row[j]] += c[j] h₀ v^k[j] quantities[q[j]] for every term j of the table (powers: scratch)."""
-    powers[0] = H0 * nu * vi * vi
-    for p in range(1, 8):
-        powers[p] = powers[p - 1] * vi
-    for j in range(row.size):
-        H[i, row[j]] += c[j] * (powers[k[j]] * quantities[q[j]])
-
-
-@njit(cache=True)
-def _sum_terms_rotated(v, chi1, chi2, R, nu, X1, X2, kappa1, kappa2, row, k, q, c, H):
-    """_sum_terms for inertial spins and rotors R, into H (n_modes, N): per sample the spins are taken into
-    the frame of R[i]; a block of samples is summed [sample, row] and copied out row by row (contiguous
-    writes of H)."""
-    quantities = np.empty(N_Q)
-    powers = np.empty(8)
-    c1, c2 = np.empty((1, 3)), np.empty((1, 3))
-    B = 256
-    block = np.zeros((B, H.shape[0]), dtype=np.complex128)
+def _sum(v, chi1, chi2, R, spins, frame, h0, logs, X1, X2, kappa1, kappa2, ell_max, ell_start, target, k, q,
+         c, columns, needed, start, coef, pb, index, sign, out):
+    """out, a float view (n_modes, 2N) of complex (n_modes, N), = the modes of every sample in frame ``frame``
+    (:data:`_FRAME_CODES`), a block of samples at a time (module docstring; the arguments are
+    :func:`_sample_block`'s, :func:`_real_terms`' and :func:`pnrotor.waveform.wigner.d_table`'s)."""
+    B = _CHUNK
+    n = 2 * ell_max + 1
+    p, Q, chi, cs = np.empty((8, B)), np.ones((N_Q, B)), np.empty((6, B)), np.empty(3)
+    X = np.empty((2 * n, B))
+    apow, bpow, mono, ea_re, ea_im, eg_re, eg_im, d, h_re, h_im = _rotation_scratch(ell_max, B)
+    one_re, one_im = np.ones((ell_max + 1, B)), np.zeros((ell_max + 1, B))
+    H_re, H_im = X[:n], X[n:]
+    # the phases of the amplitudes (e^{−im'γ}, e^{−imΦ} or 1) and of the stored modes (e^{−imα} or 1)
+    in_re, in_im, out_re, out_im = (eg_re, eg_im, ea_re, ea_im) if frame == 2 else (
+        (eg_re, eg_im, one_re, one_im) if frame == 1 else (one_re, one_im, one_re, one_im))
     for i0 in range(0, v.size, B):
         nb = min(B, v.size - i0)
-        for s in range(nb):
-            i = i0 + s
-            w, x, y, z = R[i, 0], R[i, 1], R[i, 2], R[i, 3]
-            qrotate_into(w, -x, -y, -z, chi1[i], c1[0])   # χ' = R⁻¹ χ R
-            qrotate_into(w, -x, -y, -z, chi2[i], c2[0])
-            _quantities(v[i:i + 1], c1, c2, 0, X1, X2, kappa1, kappa2, True, quantities)
-            _add_terms(v[i], nu, quantities, powers, row, k, q, c, block, s)
-        for r in range(H.shape[0]):
+        _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, X1, X2, kappa1, kappa2, p, Q, chi, cs)
+        if frame == 2:
+            _rotor_block(R, i0, nb, apow, bpow, ea_re, ea_im, eg_re, eg_im)
+        elif frame == 1:   # e^{−imΦ}: e^{−iΦ} = (w − iz)² / (w² + z²) for R = exp(Φẑ/2) = (w, 0, 0, z)
             for s in range(nb):
-                H[r, i0 + s] = block[s, r]
-                block[s, r] = 0.0
+                w, z = R[i0 + s, 0], R[i0 + s, 3]
+                n2 = w * w + z * z
+                eg_re[0, s], eg_im[0, s] = 1.0, 0.0
+                eg_re[1, s], eg_im[1, s] = (w * w - z * z) / n2, -2.0 * w * z / n2
+            _phase_powers(eg_re, eg_im, nb)
+        p0 = k0 = 0
+        for ell in range(2, ell_max + 1):
+            _ell_amplitudes(ell, ell_start[ell], ell_start[ell + 1], target, k, q, c, p, Q, in_re, in_im, X, nb)
+            o_re, o_im = H_re, H_im
+            if frame == 2:
+                _rotate_ell(ell, p0, k0, columns[ell], needed, start, coef, pb, index, sign, apow, bpow, mono, d,
+                            H_re, H_im, h_re, h_im, nb)
+                o_re, o_im = h_re, h_im
+            first = mode_index(ell, -ell)
+            for r in range(2 * ell + 1):
+                _store(o_re[r], o_im[r], out_re[abs(r - ell)], out_im[abs(r - ell)], r < ell, out[first + r, 2 * i0:],
+                       nb)
+            p0 += (ell + 1) ** 2
+            k0 += (2 * ell + 1) ** 2
 
 
-def coorbital_modes(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None):
-    """H_ℓm (n_modes, N) complex, rows in :func:`~pnrotor.waveform.layout.mode_index` order, of
-    samples v (N,) with spins chi1, chi2 (N, 3) along (n̂, λ̂, ℓ̂) (None for a nonspinning run) — or, given the
-    orbital-frame rotors R (N, 4), in the inertial frame, projected per sample in the kernel (no temporary
-    arrays) — masses m1, m2 (any unit), ℓ ≤ ell_max and amplitude order order2/2.  With R the array is
-    C-contiguous (each mode's samples contiguous), else the transpose of an (N, n_modes) one."""
+def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None, frame="coorbital",
+                   scale=1.0):
+    """The modes (n_modes, N) complex, C-contiguous, rows in :func:`~pnrotor.waveform.layout.mode_index` order,
+    of samples v (N,) for masses m1, m2 (any unit), ℓ ≤ ell_max and amplitude order order2/2, times ``scale``,
+    in ``frame``: "coorbital" (H_ℓm), "rotors" (𝔇(R) H for the orbital-frame rotors R (N, 4)) or "z" (the
+    same for rotors about ẑ, R = exp(Φẑ/2): H_ℓm e^{−imΦ}).  Spins chi1, chi2: None (nonspinning), (3,) the
+    same at every sample along (n̂, λ̂, ℓ̂), or (N, 3) per sample, along (n̂, λ̂, ℓ̂) or, given R, in the
+    inertial frame (projected per sample in the kernel)."""
     M = m1 + m2
     X1, X2 = m1 / M, m2 / M
     nu, delta = X1 * X2, X1 - X2
-    spins = chi1 is not None
-    if not spins:
-        chi1 = chi2 = np.zeros((0, 3))   # not read
     v = np.ascontiguousarray(v, dtype=np.float64)
-    chi1, chi2 = np.ascontiguousarray(chi1, dtype=np.float64), np.ascontiguousarray(chi2, dtype=np.float64)
-    terms = table(nu, delta, ell_max, order2, spins)
-    if R is not None and spins:   # each mode's samples contiguous (what rotate_modes reads)
-        H = np.zeros((n_modes(ell_max), v.size), dtype=np.complex128)
-        _sum_terms_rotated(v, chi1, chi2, np.ascontiguousarray(R, dtype=np.float64), nu, X1, X2, float(kappa1),
-                           float(kappa2), *terms, H)
-        return H
-    H = np.zeros((v.size, n_modes(ell_max)), dtype=np.complex128)   # each sample's modes contiguous
-    _sum_terms(v, chi1, chi2, nu, X1, X2, float(kappa1), float(kappa2), spins, *terms, H)
-    return H.T
+    empty = np.zeros((0, 3))
+    constant = chi1 is not None and np.ndim(chi1) == 1
+    spins = 0 if chi1 is None or constant else (2 if R is not None else 1)
+    constants = None
+    if constant:
+        Q = np.ones((N_Q, 1))
+        _spin_block(np.concatenate((chi1, chi2)).astype(np.float64).reshape(6, 1), 1, X1, X2, float(kappa1),
+                    float(kappa2), Q)
+        constants = tuple(Q[:, 0].tolist())
+    start, coef, _, pb, index, sign = d_table(int(ell_max))
+    ell_start, target, k, q, c, columns, needed = _real_terms(nu, delta, int(ell_max), int(order2), chi1 is not None,
+                                                              constants)
+    chi1, chi2 = (empty, empty) if not spins else (np.ascontiguousarray(x, dtype=np.float64) for x in (chi1, chi2))
+    R = np.zeros((0, 4)) if R is None else np.ascontiguousarray(R, dtype=np.float64)
+    out = np.empty((n_modes(ell_max), v.size), dtype=np.complex128)
+    _sum(v, chi1, chi2, R, spins, _FRAME_CODES[frame], scale * H0 * nu, bool(np.any(q == _Q_LOG)), X1, X2,
+         float(kappa1), float(kappa2), int(ell_max), ell_start, target, k, q, c, columns, needed, start, coef, pb,
+         index, sign, out.view(np.float64))
+    return out
+
+
+def coorbital_modes(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None):
+    """H_ℓm (n_modes, N) complex, C-contiguous, rows in :func:`~pnrotor.waveform.layout.mode_index` order, of
+    samples v (N,) with spins chi1, chi2 (N, 3) along (n̂, λ̂, ℓ̂) (None for a nonspinning run) — or, given the
+    orbital-frame rotors R (N, 4), in the inertial frame, projected per sample in the kernel (no temporary
+    arrays) — masses m1, m2 (any unit), ℓ ≤ ell_max and amplitude order order2/2."""
+    return modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1, kappa2, R=R)

@@ -3,12 +3,15 @@
 For every sample of an :class:`pnrotor.pn.evolve.Evolution` (v, Φ, χ₁, χ₂ and the orbital-frame rotor R
 with n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹):
 
-1. the spins in the co-orbital frame, χᵢ' = R⁻¹ χᵢ R (components along n̂, λ̂, ℓ̂), formed per sample
-   inside the amplitude kernel (no temporary arrays);
+1. the spins in the co-orbital frame, χᵢ' = R⁻¹ χᵢ R (components along n̂, λ̂, ℓ̂);
 2. the co-orbital amplitudes H_ℓm(v, ν, δ, χ₁', χ₂') up to ``amplitude_order`` and ``ell_max``:
    :mod:`pnrotor.waveform.nonspinning` and :mod:`pnrotor.waveform.spin`, each term with its source;
 3. the inertial modes h_ℓm = Σ_m' 𝔇^ℓ_{m m'}(R) H_ℓm' (:mod:`pnrotor.waveform.wigner`; Boyle et al. 2013,
    arXiv:1302.2919): the frame history is exactly what turns amplitudes into a waveform.
+
+All three in one compiled pass over blocks of samples (:func:`pnrotor.waveform.amplitudes.modes_in_frame`):
+no array of spins or of H is formed, only h.  A nonprecessing run's spins are constant along ℓ̂ and go into
+the coefficients, and in its own frame (R = exp(Φẑ/2)) the rotation is h_ℓm = H_ℓm e^{−imΦ}.
 
 Convention: LALSuite's (its mode signs; h₊ − i h× = Σ h_ℓm ₋₂Y_ℓm(ι, φ) with its ₋₂Y_ℓm, see
 :mod:`pnrotor.waveform.polarizations`); for a nonspinning binary h₂₂ = +|h₂₂| e^{−2iΦ}.  Kidder 2008
@@ -28,10 +31,10 @@ import numpy as np
 
 from pnrotor import quaternion as q
 from pnrotor.waveform import polarizations as _pol
-from pnrotor.waveform.amplitudes import coorbital_modes
+from pnrotor.waveform.amplitudes import modes_in_frame
 from pnrotor.waveform.layout import ell_m as _ell_m
 from pnrotor.waveform.layout import mode_index
-from pnrotor.waveform.wigner import rotate_about_z, rotate_modes, wigner_D
+from pnrotor.waveform.wigner import rotate_modes
 
 __all__ = ["Modes", "modes", "check_arguments", "FRAMES"]
 
@@ -155,17 +158,26 @@ def check_arguments(ell_max, amplitude_order, distance=None):
     return int(ell_max), int(order2), None if distance is None else _megaparsecs(distance)
 
 
-def _to_inertial(H, evolution, ell_max):
-    """h = 𝔇(R) H; for a nonprecessing run R = R₀ exp(Φẑ/2) with R₀ the initial frame, so h = 𝔇(R₀) (H e^{−imΦ})
-    and, in the default frame (R₀ = 1), just H e^{−imΦ}."""
-    inputs = evolution.inputs
-    if inputs["state"] != "aligned":
-        return rotate_modes(H, evolution.R, ell_max)
+def _inertial(evolution, ell_max, order2, scale):
+    """h = 𝔇(R) H times ``scale``, in one pass of the amplitude kernel.  For a nonprecessing run the spins are
+    constant along ℓ̂ (folded into the coefficients) and R = R₀ exp(Φẑ/2) with R₀ the initial frame, so in the
+    default frame (R₀ = 1) h = H e^{−imΦ} (frame "z")."""
     from pnrotor.pn.initial import frame_rotor
 
-    h = rotate_about_z(H, evolution.Phi, ell_max)
-    R0 = frame_rotor(np.asarray(inputs["ell_hat"]), np.asarray(inputs["n_hat"]))
-    return h if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]) else wigner_D(R0, ell_max) @ h
+    inputs = evolution.inputs
+    chi1 = chi2 = None
+    frame = "rotors"
+    if inputs["state"] == "precessing":   # spins taken into the orbital frame inside the kernel
+        chi1, chi2 = evolution.chi1, evolution.chi2
+    else:
+        if inputs["spin_content"] == "aligned":
+            chi1, chi2 = (np.array([0.0, 0.0, np.dot(chi[0], evolution.ell_hat[0])])
+                          for chi in (evolution.chi1, evolution.chi2))
+        R0 = frame_rotor(np.asarray(inputs["ell_hat"]), np.asarray(inputs["n_hat"]))
+        if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]):
+            frame = "z"
+    return modes_in_frame(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
+                          inputs["kappa1"], inputs["kappa2"], R=evolution.R, frame=frame, scale=scale)
 
 
 def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
@@ -174,17 +186,8 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
     (Mpc or an astropy length) or, without one, as r h / M.  Returns :class:`Modes`."""
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
     inputs = evolution.inputs
-    chi1 = chi2 = R = None
-    if inputs["state"] == "precessing":   # spins taken into the orbital frame inside the amplitude kernel
-        chi1, chi2, R = evolution.chi1, evolution.chi2, evolution.R
-    elif inputs["spin_content"] == "aligned":   # constant spins along ℓ̂
-        chi1, chi2 = (np.outer(np.ones(len(evolution)), [0.0, 0.0, np.dot(chi[0], evolution.ell_hat[0])])
-                      for chi in (evolution.chi1, evolution.chi2))
-    H = coorbital_modes(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
-                        inputs["kappa1"], inputs["kappa2"], R)
-    h = _to_inertial(H, evolution, ell_max)
-    if distance_Mpc is not None:
-        h *= _scale(None, distance_Mpc, inputs["M_seconds"])
+    scale = 1.0 if distance_Mpc is None else _scale(None, distance_Mpc, inputs["M_seconds"])
+    h = _inertial(evolution, ell_max, order2, scale)
     return Modes(t=evolution.t, t_seconds=evolution.t_seconds, ell_max=ell_max, data=h, frame="inertial",
                  R=evolution.R, Phi=evolution.Phi, distance_Mpc=distance_Mpc,
                  inputs=dict(inputs, ell_max=ell_max, amplitude_order=order2 / 2,
