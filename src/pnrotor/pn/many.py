@@ -5,12 +5,14 @@ frequency (forward or backward from f_ref), the state at a list of frequencies, 
 the inspiral.  :func:`evolve_many` gives exactly what :func:`pnrotor.pn.evolve.evolve` would give for each
 of those states, binary by binary:
 
-* each binary's inputs are checked and its system built by the same stages as ``evolve``
-  (:func:`~pnrotor.pn.settings.settings`, :func:`~pnrotor.pn.evolve.build_system`,
+* per chunk of :data:`CHUNK` binaries, the part of the parameter vectors that depends on the masses and κᵢ
+  alone is built for all of them in one pass of numpy (:func:`pnrotor.pn.system.spin_independent_parts`,
+  bitwise each binary's own numbers); then each binary's inputs are checked and its system built by the
+  same stages as ``evolve`` (:func:`~pnrotor.pn.settings.settings`, :func:`~pnrotor.pn.evolve.build_system`,
   :func:`~pnrotor.pn.evolve.half`); a binary whose inputs are invalid gets termination ``'invalid'``
   and the error's text as its message, NaN in its state, and the others go on;
-* the integrations run in one ``numba.prange`` loop over the binaries (threads across cores), each a call
-  of the DOP853 core with output of the final state only, grouped by right-hand side (the [v, Φ]
+* the integrations run in one ``numba.prange`` loop over the chunk's binaries (threads across cores), each
+  a call of the DOP853 core with output of the final state only, grouped by right-hand side (the [v, Φ]
   system of nonspinning and aligned binaries, the precessing one);
 * the final state becomes (v, Φ, χ₁, χ₂, R, ℓ̂) by the kernel of :func:`pnrotor.pn.sampling.sample`.
 
