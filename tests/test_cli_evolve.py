@@ -7,6 +7,7 @@ import math
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -563,7 +564,8 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     assert capsys.readouterr().err == ("pnrotor: compiling its numba kernels for this machine, once (~10-15 s); "
                                        "later runs load them in ~1 s\n")
     assert started == [True]
-    core = in_tmp / "empty-cache" / "ode_0123" / "dop853._dop853_core-495.py311.nbi"
+    core = Path(numba_cache.cache_folder()) / "dop853._dop853_core-495.py311.nbi"
+    assert core.parent.parent == in_tmp / "empty-cache"
     core.parent.mkdir(parents=True)
     core.touch()
     cli_evolve._warn_if_cold()
@@ -611,3 +613,28 @@ def test_sigterm_and_sighup_stop_a_command_like_ctrl_c(signame, in_tmp):
         process.kill()
     assert process.returncode == 130 and err == "pnrotor evolve: interrupted\n", err
     assert os.listdir(in_tmp) == []
+
+
+def test_the_cache_folder_is_the_one_numba_uses(tmp_path, monkeypatch):
+    """numba_cache.cache_folder (found without importing numba, for the cold-start message) against numba's own
+    cache locators for the DOP853 core: with NUMBA_CACHE_DIR, in the source tree, and user-wide where the
+    package folder is read-only (a system install)."""
+    import os
+
+    from numba.core import caching, config
+
+    from pnrotor import numba_cache
+    from pnrotor.ode.dop853 import _dop853_core
+    func, file = _dop853_core.py_func, _dop853_core.py_func.__code__.co_filename
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    assert numba_cache.cache_folder() == caching.InTreeCacheLocator(func, file).get_cache_path()
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path / "numba"))
+    assert numba_cache.cache_folder() == caching.UserProvidedCacheLocator(func, file).get_cache_path()
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "home-cache"))
+    monkeypatch.setattr(os, "access", lambda path, mode: False)      # the package folder read-only
+    assert numba_cache.cache_folder() == caching.UserWideCacheLocator(func, file).get_cache_path()

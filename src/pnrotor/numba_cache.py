@@ -3,8 +3,8 @@ compiling the biggest of them beside the rest.
 
 pnrotor's kernels are compiled with ``cache=True``: the first run on a machine compiles them and numba
 stores them beside the sources in ``__pycache__``, or in ``NUMBA_CACHE_DIR`` when that is set.
-:func:`is_cold` looks for the index file of the DOP853 core, the kernel every run needs, so that a caller
-can say what the wait is.  That core is half of a cold start (7.4 s of 15.8 for the CLI's main job,
+:func:`is_cold` looks for the index file of the DOP853 core, the kernel every run needs, in the folder
+numba would use (:func:`cache_folder`), so that a caller can say what the wait is.  That core is half of a cold start (7.4 s of 15.8 for the CLI's main job,
 mostly numba's typing), and numba compiles one function at a time in a process: on a cold cache
 :func:`compile_core_aside` compiles it in a second process while this one compiles the rest of its run
 (parameters, right-hand side, events), and the core's first use waits for that process and loads what it
@@ -12,12 +12,13 @@ cached (``pnrotor.ode.dop853._entry_point``).
 """
 
 import glob
+import hashlib
 import os
 import subprocess
 import sys
 from importlib.util import find_spec
 
-__all__ = ["is_cold", "compile_core_aside", "wait_for_core_aside"]
+__all__ = ["is_cold", "cache_folder", "compile_core_aside", "wait_for_core_aside"]
 
 _aside = None
 """The process compiling the DOP853 core, while it may still be running."""
@@ -25,10 +26,22 @@ _aside = None
 
 def is_cold():
     """True if numba's cache has no compiled DOP853 core for this installation yet."""
-    folder = os.environ.get("NUMBA_CACHE_DIR")
-    ode = os.path.dirname(find_spec("pnrotor.ode").origin)
-    where = os.path.join(folder, "ode_*") if folder else os.path.join(ode, "__pycache__")
-    return not glob.glob(os.path.join(where, "dop853._dop853_core-*.nbi"))
+    return not glob.glob(os.path.join(cache_folder(), "dop853._dop853_core-*.nbi"))
+
+
+def cache_folder():
+    """Where numba caches the kernels of ``pnrotor/ode`` (numba 0.5x–0.6x's locators, in their order):
+    NUMBA_CACHE_DIR/ode_<sha1 of the folder> if set; else the folder's ``__pycache__`` if it can be written;
+    else the user-wide ``$XDG_CACHE_HOME/numba/ode_<sha1>`` (~/.cache by default), where a read-only install
+    (a system site-packages) gets its cache."""
+    ode = os.path.dirname(os.path.abspath(find_spec("pnrotor.ode").origin))
+    sub = "ode_" + hashlib.sha1(ode.encode()).hexdigest()
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return os.path.join(os.environ["NUMBA_CACHE_DIR"], sub)
+    tree = os.path.join(ode, "__pycache__")
+    if os.access(tree if os.path.isdir(tree) else ode, os.W_OK):
+        return tree
+    return os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "numba", sub)
 
 
 def compile_core_aside():
