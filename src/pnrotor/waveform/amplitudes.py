@@ -17,10 +17,11 @@ that are the same at every sample (aligned ones) are folded into the coefficient
 frame into each sample's orbital frame, χ' = R⁻¹ χ R — then per ℓ the amplitudes and, without writing them
 out, the rotation to the inertial frame: H itself (co-orbital), H_ℓm e^{−imΦ} (a nonprecessing run in its
 own frame) or 𝔇(R) H (:func:`pnrotor.waveform.wigner._rotate_ell`, only the columns m' with terms).
-Measured (benchmarks/bench_modes.py, shared two-core machine), modes() per sample: precessing runs ~150 ns for
-ℓ ≤ 4 at 1.5PN and ~500–600 ns for ℓ ≤ 8 at 3.5PN, against ~400 and ~1,500 ns for amplitudes and rotation as
-two passes over an H array; nonprecessing runs ~40–100 and ~210–300 ns, against ~140–280 and ~500–700 ns.
-The kernel is one compiled function for every frame (~6 s to compile on a cold cache).  It holds the block
+Measured (benchmarks/bench_modes.py, shared two-core machine), modes() per sample: precessing runs ~130–160 ns
+for ℓ ≤ 4 at 1.5PN and ~430–500 ns for ℓ ≤ 8 at 3.5PN (~500–600 with d's elements formed per sample, ~400 and
+~1,500 ns for amplitudes and rotation as two passes over an H array); nonprecessing runs ~40–100 and ~210–300
+ns, against ~140–280 and ~500–700 ns.  The kernel is one compiled function for every frame (~5.5 s to compile on
+a cold cache).  It holds the block
 functions of :mod:`~pnrotor.waveform.wigner` and :func:`pnrotor.quaternion.qrotate_into` (numba caches it per
 source file): after editing those, remove this module's ``__pycache__/amplitudes.*.nb*``.
 """
@@ -33,8 +34,8 @@ from numba import njit
 from pnrotor.quaternion import qrotate_into
 from pnrotor.waveform import nonspinning, spin
 from pnrotor.waveform.layout import ell_m, mode_index, n_modes
-from pnrotor.waveform.wigner import (_CHUNK, _needed_elements, _phase_powers, _rotate_ell, _rotation_scratch,
-                                     _rotor_block, _store, d_table)
+from pnrotor.waveform.wigner import (_CHUNK, _phase_powers, _rotate_ell, _rotation_scratch, _rotor_block, _store,
+                                     rotation_plan)
 
 __all__ = ["table", "coorbital_modes", "modes_in_frame", "H0"]
 
@@ -74,11 +75,12 @@ def table(nu, delta, ell_max, order2, spins):
 
 @lru_cache(maxsize=64)
 def _real_terms(nu, delta, ell_max, order2, spins, constants):
-    """:func:`table`'s terms as the kernel adds them: (ell_start, target, k, q, c, columns, needed), real terms
+    """:func:`table`'s terms as the kernel adds them: (ell_start, target, k, q, c, columns, plan), real terms
     sorted by ℓ (those of ℓ are ell_start[ℓ] : ell_start[ℓ+1]), target the row of the block array (ℓ ± m for
     the real part, 2 ell_max + 1 more for the imaginary part); the spin quantities q ≥ 2 folded into c if
     ``constants`` gives their values (terms with equal target, k and q summed); columns[ℓ, m] whether H_ℓ,±m
-    has any term and needed the 𝔇 elements they use (:func:`pnrotor.waveform.wigner._needed_elements`).
+    has any term and plan the passes of the rotation that skip the others
+    (:func:`pnrotor.waveform.wigner.rotation_plan`).
     Cached: a run's modes computed again (another ℓ_max, frame or distance) skip these ~0.1–0.3 ms."""
     n_pow = 2 * ell_max + 1
     labels = ell_m(ell_max)
@@ -98,7 +100,7 @@ def _real_terms(nu, delta, ell_max, order2, spins, constants):
     columns = np.zeros((ell_max + 1, ell_max + 1), dtype=np.bool_)
     columns[ell, np.abs(target % n_pow - ell)] = True
     return (np.searchsorted(ell, np.arange(ell_max + 2)), target, k, q, np.array([summed[key] for key in keys]),
-            columns, _needed_elements(columns, ell_max))
+            columns, rotation_plan(columns))
 
 
 @njit(cache=True, fastmath={"contract"})
@@ -184,26 +186,27 @@ def _mirror(h_re, h_im, hn_re, hn_im, e_re, e_im, sig, nb):
 
 
 @njit(cache=True)
-def _sum(v, chi1, chi2, R, spins, frame, h0, logs, X1, X2, kappa1, kappa2, ell_max, ell_start, target, k, q,
-         c, columns, needed, start, coef, pb, index, sign, out):
+def _sum(v, chi1, chi2, R, spins, frame, h0, scale, logs, X1, X2, kappa1, kappa2, ell_max, ell_start, target, k, q,
+         c, columns, first, rows, coefs, out):
     """out, a float view (n_modes, 2N) of complex (n_modes, N), = the modes of every sample in frame ``frame``
-    (:data:`_FRAME_CODES`), a block of samples at a time (module docstring; the arguments are
-    :func:`_sample_block`'s, :func:`_real_terms`' and :func:`pnrotor.waveform.wigner.d_table`'s)."""
+    (:data:`_FRAME_CODES`), a block of samples at a time, times ``scale`` as they are stored (module docstring; the
+    other arguments are :func:`_sample_block`'s, :func:`_real_terms`' and
+    :func:`pnrotor.waveform.wigner.rotation_plan`'s)."""
     B = _CHUNK
     n = 2 * ell_max + 1
     p, Q, chi, cs = np.empty((8, B)), np.ones((N_Q, B)), np.empty((6, B)), np.empty(3)
     X = np.empty((2 * n, B))
-    apow, bpow, mono, ea_re, ea_im, eg_re, eg_im, d, h_re, h_im = _rotation_scratch(ell_max, B)
+    eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = _rotation_scratch(ell_max, B)
     one_re, one_im = np.ones((ell_max + 1, B)), np.zeros((ell_max + 1, B))
     H_re, H_im = X[:n], X[n:]
-    # the phases of the amplitudes (e^{−im'γ}, e^{−imΦ} or 1) and of the stored modes (e^{−imα} or 1)
+    # the phases of the amplitudes ((i e^{−iγ})^m', e^{−imΦ} or 1) and of the stored modes ((−i e^{−iα})^m or 1)
     in_re, in_im, out_re, out_im = (eg_re, eg_im, ea_re, ea_im) if frame == 2 else (
         (eg_re, eg_im, one_re, one_im) if frame == 1 else (one_re, one_im, one_re, one_im))
     for i0 in range(0, v.size, B):
         nb = min(B, v.size - i0)
         _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, X1, X2, kappa1, kappa2, p, Q, chi, cs)
         if frame == 2:
-            _rotor_block(R, i0, nb, apow, bpow, ea_re, ea_im, eg_re, eg_im)
+            _rotor_block(R, i0, nb, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
         elif frame == 1:   # e^{−imΦ}: e^{−iΦ} = (w − iz)² / (w² + z²) for R = exp(Φẑ/2) = (w, 0, 0, z)
             for s in range(nb):
                 w, z = R[i0 + s, 0], R[i0 + s, 3]
@@ -211,20 +214,17 @@ def _sum(v, chi1, chi2, R, spins, frame, h0, logs, X1, X2, kappa1, kappa2, ell_m
                 eg_re[0, s], eg_im[0, s] = 1.0, 0.0
                 eg_re[1, s], eg_im[1, s] = (w * w - z * z) / n2, -2.0 * w * z / n2
             _phase_powers(eg_re, eg_im, nb)
-        p0 = k0 = 0
         for ell in range(2, ell_max + 1):
             _ell_amplitudes(ell, ell_start[ell], ell_start[ell + 1], target, k, q, c, p, Q, in_re, in_im, X, nb)
             o_re, o_im = H_re, H_im
             if frame == 2:
-                _rotate_ell(ell, p0, k0, columns[ell], needed, start, coef, pb, index, sign, apow, bpow, mono, d,
-                            H_re, H_im, h_re, h_im, nb)
+                _rotate_ell(ell, columns[ell], first, rows, coefs, eb_re, eb_im, H_re, H_im, y_re, y_im, h_re, h_im,
+                            nb)
                 o_re, o_im = h_re, h_im
-            first = mode_index(ell, -ell)
+            first_row = mode_index(ell, -ell)
             for r in range(2 * ell + 1):
-                _store(o_re[r], o_im[r], out_re[abs(r - ell)], out_im[abs(r - ell)], r < ell, out[first + r, 2 * i0:],
-                       nb)
-            p0 += (ell + 1) ** 2
-            k0 += (2 * ell + 1) ** 2
+                _store(o_re[r], o_im[r], out_re[abs(r - ell)], out_im[abs(r - ell)], r < ell, scale,
+                       out[first_row + r, 2 * i0:], nb)
 
 
 def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None, frame="coorbital",
@@ -248,15 +248,14 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
         _spin_block(np.concatenate((chi1, chi2)).astype(np.float64).reshape(6, 1), 1, X1, X2, float(kappa1),
                     float(kappa2), Q)
         constants = tuple(Q[:, 0].tolist())
-    start, coef, _, pb, index, sign = d_table(int(ell_max))
-    ell_start, target, k, q, c, columns, needed = _real_terms(nu, delta, int(ell_max), int(order2), chi1 is not None,
+    ell_start, target, k, q, c, columns, plan = _real_terms(nu, delta, int(ell_max), int(order2), chi1 is not None,
                                                               constants)
     chi1, chi2 = (empty, empty) if not spins else (np.ascontiguousarray(x, dtype=np.float64) for x in (chi1, chi2))
     R = np.zeros((0, 4)) if R is None else np.ascontiguousarray(R, dtype=np.float64)
     out = np.empty((n_modes(ell_max), v.size), dtype=np.complex128)
-    _sum(v, chi1, chi2, R, spins, _FRAME_CODES[frame], scale * H0 * nu, bool(np.any(q == _Q_LOG)), X1, X2,
-         float(kappa1), float(kappa2), int(ell_max), ell_start, target, k, q, c, columns, needed, start, coef, pb,
-         index, sign, out.view(np.float64))
+    _sum(v, chi1, chi2, R, spins, _FRAME_CODES[frame], H0 * nu, float(scale), bool(np.any(q == _Q_LOG)), X1, X2,
+         float(kappa1), float(kappa2), int(ell_max), ell_start, target, k, q, c, columns, *plan,
+         out.view(np.float64))
     return out
 
 
