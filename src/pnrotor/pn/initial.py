@@ -137,4 +137,5 @@ def frame_rotor(ell, n):
     from ..quaternion import qfrom_matrix
     lam = (ell[1] * n[2] - ell[2] * n[1], ell[2] * n[0] - ell[0] * n[2], ell[0] * n[1] - ell[1] * n[0])
     M = np.array([[n[0], lam[0], ell[0]], [n[1], lam[1], ell[1]], [n[2], lam[2], ell[2]]])
-    return np.asarray(qfrom_matrix(M))
+    # the kernel's own Python: once per frame (settings caches it), and no 0.5 s compile on a cold cache
+    return qfrom_matrix.py_func(M)

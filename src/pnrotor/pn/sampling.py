@@ -70,7 +70,7 @@ def _store_row(i, vv, ph, w, x, yy, z, v, Phi, R, ell):
     ell[i, 2] = w * w - x * x - yy * yy + z * z
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _store_block(mode, y, cs, m, i0, R0, ell0, c1, c2, v, Phi, chi1, chi2, R, ell):
     """History rows i0 … i0 + m − 1 from the states y[:, :m] (one column per row), cs a (2, _BLOCK) buffer.
 

@@ -439,17 +439,6 @@ def _store_series(N, D, Ep, basis, fold, p, v0):
     return n0, d0, eval_at(Ep, v0, basis), peak0
 
 
-@njit(cache=True)
-def _vdot_series_each(E_raw, F_raw, kmax, approx):
-    """:func:`_vdot_series` of every binary i of E_raw[i], F_raw[i] → (N, D, Ê′), each (n, NK, NB, NL)."""
-    N = np.empty_like(E_raw)
-    D = np.empty_like(E_raw)
-    Ep = np.empty_like(E_raw)
-    for i in range(E_raw.shape[0]):
-        N[i], D[i], Ep[i] = _vdot_series(E_raw[i], F_raw[i], kmax, approx)
-    return N, D, Ep
-
-
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
                     rotor="coprecessing", phase_shift=False, aligned_basis=None,
                     omega_l="torque", basis=None, v_check=None, parts=None):
@@ -546,8 +535,24 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     p[P_SPINTOL] = SPIN_TOL
     p[P_DEN_EPS] = DEN_EPS
     E, F = (_binaries_first(x) for x in (energy_series(X1, kappa1, kappa2), flux_series(X1, kappa1, kappa2)))
-    N, D, Ep = _vdot_series_each(E, F, np.array(kmax, dtype=np.int64), APPROXIMANTS.index(approximant))
+    kmax, approx = np.array(kmax, dtype=np.int64), APPROXIMANTS.index(approximant)
+    if np.ndim(X1) == 0:   # one binary (evolve): _vdot_series_each would cost 3.5 s more to compile, cold
+        N, D, Ep = (x[None] for x in _vdot_series(E[0], F[0], kmax, approx))
+    else:
+        N, D, Ep = _vdot_series_each(E, F, kmax, approx)
     return _binaries_first(p), N, D, Ep
+
+
+@njit(cache=True)
+def _vdot_series_each(E_raw, F_raw, kmax, approx):
+    """:func:`_vdot_series` of every binary i of E_raw[i], F_raw[i] → (N, D, Ê′), each (n, NK, NB, NL); the
+    same arithmetic as a call per binary (no fastmath: nothing is fused or reordered), ~5 µs faster each."""
+    N = np.empty_like(E_raw)
+    D = np.empty_like(E_raw)
+    Ep = np.empty_like(E_raw)
+    for i in range(E_raw.shape[0]):
+        N[i], D[i], Ep[i] = _vdot_series(E_raw[i], F_raw[i], kmax, approx)
+    return N, D, Ep
 
 
 def _binaries_first(x):
