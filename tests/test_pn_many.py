@@ -175,7 +175,7 @@ def test_refused_targets_leave_the_others():
     pop = evolve_many([30.0, -1.0], [10.0, 10.0], [0, 0, 0.5], [0, 0, 0], 20.0,
                       frequencies=[30.0, 20.0, 1e-9, 15.0, 1e5])
     assert list(pop.termination[0]) == ["f_max", "invalid", "invalid", "f_min", "invalid"]
-    assert "is f_ref" in pop.message[0, 1] and "frequencies[2]" in pop.message[0, 2] and "at least" in pop.message[0, 2]
+    assert "of f_ref" in pop.message[0, 1] and "frequencies[2]" in pop.message[0, 2] and "at least" in pop.message[0, 2]
     assert "frequencies[4]" in pop.message[0, 4] and "at most" in pop.message[0, 4]
     assert np.all(np.isnan(pop.v[0, [1, 2, 4]])) and not np.any(np.isnan(pop.v[0, [0, 3]]))
     assert list(pop.termination[1]) == ["invalid"] * 5 and all("m1" in m for m in pop.message[1])
@@ -207,3 +207,25 @@ def test_per_binary_kappas_and_chunks_equal_single_evolve(monkeypatch):
         assert pop.t[i] == e.t[-1] and pop.termination[i] == e.termination
         for k in FIELDS:
             np.testing.assert_array_equal(getattr(pop, k)[i], getattr(e, k)[-1], err_msg=f"binary {i}, {k}")
+
+
+def test_a_target_an_ulp_from_f_ref_is_refused_as_evolve_refuses_it():
+    """v = (πMf)^(1/3) maps a frequency an ulp from f_ref onto f_ref's own v, which evolve refuses as f_max or
+    f_min (its checks are on v): such a target is 'invalid', and the binary's other targets go on (as the
+    farthest target it must not make the whole binary invalid, as a nearer one not return another state)."""
+    from pnrotor.pn.initial import total_mass_seconds, v_from_frequency
+    M = total_mass_seconds(30.0, 10.0)
+    # an f_ref whose neighbours an ulp up and an ulp down both give its v
+    f_ref = next(f for f in np.arange(20.0, 21.0, 0.001) if all(
+        v_from_frequency(np.nextafter(f, g), M) == v_from_frequency(f, M) for g in (0.0, 100.0)))
+    up, down = float(np.nextafter(f_ref, 100.0)), float(np.nextafter(f_ref, 0.0))
+    args = (30.0, 10.0, [0.3, 0.1, 0.4], [0.0, 0.2, -0.3], float(f_ref))
+    for kw in ({"f_max": up}, {"f_min": down}):
+        with pytest.raises(ValueError, match="f_max|f_min"):
+            evolve(*args, **kw)
+    pop = evolve_many([30.0], *args[1:], frequencies=[40.0, up, 10.0, down])
+    assert list(pop.termination[0]) == ["f_max", "invalid", "f_min", "invalid"]
+    assert "gives the v of f_ref" in pop.message[0, 1] and np.all(np.isnan(pop.v[0, [1, 3]]))
+    alone = evolve_many([30.0], *args[1:], frequencies=[up, 10.0])
+    assert list(alone.termination[0]) == ["invalid", "f_min"]
+    np.testing.assert_array_equal(alone.chi1[0, 1], pop.chi1[0, 2])

@@ -302,8 +302,8 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     f_min : float or Quantity, optional
         Integrate backward from f_ref down to this GW frequency (< f_ref).  None: start at f_ref.
     f_max : float or Quantity, optional
-        Stop the forward integration at this GW frequency (> f_ref).  None: integrate until the PN
-        energy balance terminates the inspiral (or v = 1).
+        Stop the forward integration at this GW frequency (> f_ref, and v ≤ 1 there).  None: integrate until
+        the PN energy balance terminates the inspiral (or v = 1).
     approximant : {'T1', 'T4', 'T5'}
         TaylorT1 (−F/E′ evaluated as a ratio), TaylorT4 (ratio re-expanded, truncated), TaylorT5 (its
         inverse re-expanded, truncated).  'TaylorT4' and 'SpinTaylorT4' are accepted too.

@@ -12,7 +12,8 @@ of those states, binary by binary:
   :func:`~pnrotor.pn.evolve.half`); a binary whose inputs are invalid gets termination ``'invalid'``
   and the error's text as its message, NaN in its state, and the others go on;
 * the integrations run in one ``numba.prange`` loop over the chunk's binaries (threads across cores), each
-  a call of the DOP853 core with output of the final state only, grouped by right-hand side (the [v, Φ]
+  a call of the DOP853 core with output of the final state only (and of the dense output where a list has
+  nearer targets), grouped by right-hand side (the [v, Φ]
   system of nonspinning and aligned binaries, the precessing one);
 * the final state becomes (v, Φ, χ₁, χ₂, R, ℓ̂) by the kernel of :func:`pnrotor.pn.sampling.sample`.
 
@@ -70,7 +71,8 @@ class Population:
         then that end's), or ``'invalid'``
     message : str — the termination's message, or the error naming the bad input
     nsteps, nfev : int — the step attempts and right-hand-side evaluations of the integration that gave the
-        state (one per binary and direction: the targets of a list share it)
+        state (one per binary and direction: the targets of a list share it; with nearer targets it keeps
+        dense output, 3 more evaluations per step than a single ``evolve``)
     inputs : dict — the options shared by every binary
     """
 
@@ -212,16 +214,19 @@ def _integrate_groups(groups, atol, rtol, max_steps, out, counts):
 
 def _refused_targets(f, m1, m2, f_ref):
     """{k: message} of the listed frequencies that ``evolve`` would refuse as f_max or f_min for a binary it
-    accepts: f_ref itself, and those outside the PN range (v > 1 or v < V_MIN, the checks of
-    :func:`~pnrotor.pn.settings.settings`); the binary's other targets go on."""
+    accepts, by the checks of :func:`~pnrotor.pn.settings.settings` on v: those whose v is not beyond v at
+    f_ref (f_ref itself, and a frequency an ulp away that gives the same v), and those outside the PN range
+    (v > 1 or v < V_MIN); the binary's other targets go on."""
     refused = {}
     if not (m1 > 0.0 and m2 > 0.0 and math.isfinite(m1 + m2)):
         return refused    # the binary itself is invalid (settings says why)
     M_sec = _ini.total_mass_seconds(m1, m2)
+    v0 = _ini.v_from_frequency(f_ref, M_sec)
     for k, x in enumerate(f):
         v = _ini.v_from_frequency(x, M_sec)
-        if x == f_ref:
-            refused[k] = f"frequencies[{k}] = {x} Hz is f_ref: a target must differ from f_ref"
+        if not (v > v0 if x >= f_ref else v < v0):
+            refused[k] = (f"frequencies[{k}] = {x!r} Hz gives the v of f_ref = {f_ref!r} Hz: a target must differ "
+                          f"from f_ref")
         elif v > 1.0:
             refused[k] = (f"frequencies[{k}] = {x} Hz gives v = {v:.4g} > 1; for these masses a target must be at "
                           f"most {1.0 / (math.pi * M_sec):.6g} Hz")
@@ -250,8 +255,8 @@ def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_
     frequencies : None or array_like (K,) or (N, K)
         Instead of f_end: K GW frequencies (Hz, finite, > 0; shared or per binary), in any order and on either
         side of f_ref; the state at each, as ``evolve`` with f_max (or f_min) there would end.  The outputs
-        gain a K axis.  A frequency ``evolve`` would refuse (f_ref itself, or outside the PN range) gives an
-        ``'invalid'`` entry; the binary's other targets go on.
+        gain a K axis.  A frequency ``evolve`` would refuse (f_ref, or one that gives its v, or one outside the
+        PN range) gives an ``'invalid'`` entry; the binary's other targets go on.
     ell_hat, n_hat : array_like (N, 3) or (3,)
         ℓ̂ and n̂ at f_ref.
     kappa1, kappa2 : array_like (N,) or scalar
