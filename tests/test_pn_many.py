@@ -175,7 +175,8 @@ def test_refused_targets_leave_the_others():
     pop = evolve_many([30.0, -1.0], [10.0, 10.0], [0, 0, 0.5], [0, 0, 0], 20.0,
                       frequencies=[30.0, 20.0, 1e-9, 15.0, 1e5])
     assert list(pop.termination[0]) == ["f_max", "invalid", "invalid", "f_min", "invalid"]
-    assert "of f_ref" in pop.message[0, 1] and "frequencies[2]" in pop.message[0, 2] and "at least" in pop.message[0, 2]
+    assert "frequencies[1] = 20.0 Hz must be above f_ref" in pop.message[0, 1]
+    assert "frequencies[2]" in pop.message[0, 2] and "at least" in pop.message[0, 2]
     assert "frequencies[4]" in pop.message[0, 4] and "at most" in pop.message[0, 4]
     assert np.all(np.isnan(pop.v[0, [1, 2, 4]])) and not np.any(np.isnan(pop.v[0, [0, 3]]))
     assert list(pop.termination[1]) == ["invalid"] * 5 and all("m1" in m for m in pop.message[1])
@@ -225,7 +226,8 @@ def test_a_target_an_ulp_from_f_ref_is_refused_as_evolve_refuses_it():
             evolve(*args, **kw)
     pop = evolve_many([30.0], *args[1:], frequencies=[40.0, up, 10.0, down])
     assert list(pop.termination[0]) == ["f_max", "invalid", "f_min", "invalid"]
-    assert "gives the v of f_ref" in pop.message[0, 1] and np.all(np.isnan(pop.v[0, [1, 3]]))
+    assert "must be above f_ref" in pop.message[0, 1] and "must be below f_ref" in pop.message[0, 3]
+    assert np.all(np.isnan(pop.v[0, [1, 3]]))
     alone = evolve_many([30.0], *args[1:], frequencies=[up, 10.0])
     assert list(alone.termination[0]) == ["invalid", "f_min"]
     np.testing.assert_array_equal(alone.chi1[0, 1], pop.chi1[0, 2])

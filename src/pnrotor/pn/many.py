@@ -43,7 +43,7 @@ from . import initial as _ini
 from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _tolerances, build_system, half, population_parts,
                      termination)
 from .sampling import _fill_history, output_mode
-from .settings import V_MIN, settings
+from .settings import settings, target_v
 from .system import EV_V_END, N_EVENTS, P_VEND
 
 __all__ = ["evolve_many", "Population"]
@@ -214,25 +214,18 @@ def _integrate_groups(groups, atol, rtol, max_steps, out, counts):
 
 def _refused_targets(f, m1, m2, f_ref):
     """{k: message} of the listed frequencies that ``evolve`` would refuse as f_max or f_min for a binary it
-    accepts, by the checks of :func:`~pnrotor.pn.settings.settings` on v: those whose v is not beyond v at
-    f_ref (f_ref itself, and a frequency an ulp away that gives the same v), and those outside the PN range
-    (v > 1 or v < V_MIN); the binary's other targets go on."""
+    accepts, by the same check (:func:`~pnrotor.pn.settings.target_v`: v beyond v at f_ref, and within the PN
+    range); the binary's other targets go on."""
     refused = {}
     if not (m1 > 0.0 and m2 > 0.0 and math.isfinite(m1 + m2)):
         return refused    # the binary itself is invalid (settings says why)
     M_sec = _ini.total_mass_seconds(m1, m2)
     v0 = _ini.v_from_frequency(f_ref, M_sec)
     for k, x in enumerate(f):
-        v = _ini.v_from_frequency(x, M_sec)
-        if not (v > v0 if x >= f_ref else v < v0):
-            refused[k] = (f"frequencies[{k}] = {x!r} Hz gives the v of f_ref = {f_ref!r} Hz: a target must differ "
-                          f"from f_ref")
-        elif v > 1.0:
-            refused[k] = (f"frequencies[{k}] = {x} Hz gives v = {v:.4g} > 1; for these masses a target must be at "
-                          f"most {1.0 / (math.pi * M_sec):.6g} Hz")
-        elif v < V_MIN:
-            refused[k] = (f"frequencies[{k}] = {x} Hz gives v = {v:.4g} < {V_MIN:g}; for these masses a target "
-                          f"must be at least {_ini.frequency_from_v(V_MIN, M_sec):.6g} Hz")
+        try:
+            target_v(x, f"frequencies[{k}]", x >= f_ref, f_ref, v0, M_sec)
+        except ValueError as e:
+            refused[k] = str(e)
     return refused
 
 

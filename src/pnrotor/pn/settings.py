@@ -174,23 +174,32 @@ def _frequencies(m1, m2, f_ref, f_min, f_max):
     M_sec = _ini.total_mass_seconds(m1, m2)
     X1 = m1 / (m1 + m2)
     v0 = _ini.v_from_frequency(f_ref, M_sec)
-    v_min = None if f_min is None else _ini.v_from_frequency(f_min, M_sec)
-    v_max = 1.0 if f_max is None else _ini.v_from_frequency(f_max, M_sec)
     if v0 >= 1.0:
         raise ValueError(f"f_ref = {f_ref} Hz gives v = {v0:.4g} >= 1; f_ref must be below "
                          f"{1.0 / (math.pi * M_sec):.6g} Hz")
-    if v0 < V_MIN or (v_min is not None and v_min < V_MIN):
-        name, f, v = ("f_ref", f_ref, v0) if v0 < V_MIN else ("f_min", f_min, v_min)
+    if v0 < V_MIN:
+        raise ValueError(f"f_ref = {f_ref} Hz gives v = {v0:.4g} < {V_MIN:g}; for these masses f_ref must be at "
+                         f"least {_ini.frequency_from_v(V_MIN, M_sec):.6g} Hz")
+    v_min = None if f_min is None else target_v(f_min, "f_min", False, f_ref, v0, M_sec)
+    v_max = 1.0 if f_max is None else target_v(f_max, "f_max", True, f_ref, v0, M_sec)
+    return M_sec, X1, v0, v_min, v_max
+
+
+def target_v(f, name, forward, f_ref, v0, M_sec):
+    """v at the GW frequency f where a run from f_ref (v = v0) ends: forward (f_max) above v0 and at most 1,
+    backward (f_min) below v0 and at least V_MIN; else a ValueError naming ``name``.  The checks are on v, so a
+    frequency an ulp from f_ref that gives v0 is refused too (``evolve_many`` applies them to each listed
+    target)."""
+    v = _ini.v_from_frequency(f, M_sec)
+    if forward and v > 1.0:
+        raise ValueError(f"{name} = {f} Hz gives v = {v:.4g} > 1; for these masses {name} must be at most "
+                         f"{1.0 / (math.pi * M_sec):.6g} Hz")
+    if not forward and v < V_MIN:
         raise ValueError(f"{name} = {f} Hz gives v = {v:.4g} < {V_MIN:g}; for these masses {name} must be at "
                          f"least {_ini.frequency_from_v(V_MIN, M_sec):.6g} Hz")
-    if v_max > 1.0:
-        raise ValueError(f"f_max = {f_max} Hz gives v = {v_max:.4g} > 1; for these masses f_max must be at most "
-                         f"{1.0 / (math.pi * M_sec):.6g} Hz")
-    if v_min is not None and not v_min < v0:
-        raise ValueError(f"f_min = {f_min} Hz must be below f_ref = {f_ref} Hz")
-    if not v_max > v0:
-        raise ValueError(f"f_max = {f_max} Hz must be above f_ref = {f_ref} Hz")
-    return M_sec, X1, v0, v_min, v_max
+    if not (v > v0 if forward else v < v0):
+        raise ValueError(f"{name} = {f} Hz must be {'above' if forward else 'below'} f_ref = {f_ref} Hz")
+    return v
 
 
 def _spin_content(c1, c2, ell):
