@@ -8,13 +8,14 @@ of those states, binary by binary:
 * per chunk of :data:`CHUNK` binaries, the part of the parameter vectors that depends on the masses and κᵢ
   alone is built for all of them in one pass of numpy (:func:`pnrotor.pn.system.spin_independent_parts`,
   bitwise each binary's own numbers); then each binary's inputs are checked and its system built by the
-  same stages as ``evolve`` (:func:`~pnrotor.pn.settings.settings`, :func:`~pnrotor.pn.evolve.build_system`,
-  :func:`~pnrotor.pn.evolve.half`); a binary whose inputs are invalid gets termination ``'invalid'``
-  and the error's text as its message, NaN in its state, and the others go on;
+  same stages as ``evolve`` (:func:`~pnrotor.pn.settings.settings`, its shared options checked once,
+  :func:`~pnrotor.pn.evolve.build_system`, :func:`~pnrotor.pn.evolve.half`); a binary whose inputs are
+  invalid gets termination ``'invalid'`` and the error's text as its message, NaN in its state, and the
+  others go on;
 * the integrations run in one ``numba.prange`` loop over the chunk's binaries (threads across cores), each
   a call of the DOP853 core with output of the final state only (and of the dense output where a list has
-  nearer targets), grouped by right-hand side (the [v, Φ]
-  system of nonspinning and aligned binaries, the precessing one);
+  nearer targets), grouped by right-hand side (the [v, Φ] system of nonspinning and aligned binaries, the
+  precessing one);
 * the final state becomes (v, Φ, χ₁, χ₂, R, ℓ̂) by the kernel of :func:`pnrotor.pn.sampling.sample`.
 
 A list of K frequencies costs one integration per direction, not K: each half runs to its farthest target
@@ -45,7 +46,7 @@ from . import initial as _ini
 from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _tolerances, build_system, half, population_parts,
                      termination)
 from .sampling import _fill_history, output_mode
-from .settings import settings, target_v
+from .settings import binary_settings, options, target_v
 from .system import EV_V_END, N_EVENTS, P_VEND
 
 __all__ = ["evolve_many", "Population"]
@@ -295,10 +296,11 @@ integrate_rotor, precession, max_steps
                   spin_spin_order=spin_spin_order, atol=atol, rtol=rtol, sampling="final", rotor=rotor,
                   precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
                   precession=precession, max_steps=max_steps)
-    # the shared options fail for every binary alike: check them once, with a reference binary (a binary of the
-    # table could itself be invalid, which must not raise)
-    reference = settings(10.0, 10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 20.0, f_min=None, f_max=None,
-                         ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, **shared)
+    # the shared options fail for every binary alike: check them once (a binary of the table could itself be
+    # invalid, which must not raise); a reference binary carries them to population_parts
+    opts = options(**shared)
+    reference = binary_settings(opts, 10.0, 10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 20.0, None, None,
+                                (0.0, 0.0, 1.0), (1.0, 0.0, 0.0), 1.0, 1.0)
 
     # one row per (binary, target), row i·K + k; reshaped to (N, K) at the end
     nr = n * K
@@ -325,12 +327,12 @@ integrate_rotor, precession, max_steps
                 skip = _refused_targets(f, m1l[i], m2l[i], fr) if listed else {}
                 kept = [k for k in range(K) if k not in skip]
                 behind = [k for k in kept if f[k] < fr]
-                ahead = [k for k in kept if not f[k] < fr]    # NaN (f_end mode: to the end of the inspiral) goes forward
+                ahead = [k for k in kept if not f[k] < fr]    # NaN (f_end: to the end of the inspiral) goes forward
                 f_ahead = [f[k] for k in ahead if f[k] == f[k]]
                 try:
-                    s = settings(m1l[i], m2l[i], c1l[i], c2l[i], fr, f_min=min(f[k] for k in behind) if behind else None,
-                                 f_max=max(f_ahead) if f_ahead else None, ell_hat=elll[i], n_hat=nhl[i],
-                                 kappa1=k1l[i], kappa2=k2l[i], **shared)
+                    s = binary_settings(opts, m1l[i], m2l[i], c1l[i], c2l[i], fr,
+                                        min(f[k] for k in behind) if behind else None,
+                                        max(f_ahead) if f_ahead else None, elll[i], nhl[i], k1l[i], k2l[i])
                     system = build_system(s, tuple(x[i - start] for x in parts))
                 except ValueError as e:
                     out.message[i * K:(i + 1) * K] = str(e)
@@ -351,11 +353,13 @@ integrate_rotor, precession, max_steps
                     key = (system.rhs, system.events, output_mode(s), system.y0.size)
                     groups.setdefault(key, []).append((v_k[-1][1], system.y0, p, t_end, directions, s, v_k[:-1]))
             _integrate_groups(groups, float(atol), float(rtol), int(max_steps), out, counts)
-    for r in range(nr):
-        if ends[r] is not None:
-            status, event = counts[r, :2]
-            out.termination[r] = termination(status, event, ends[r], reference.approximant)
-            out.message[r] = TERMINATION_MESSAGES[out.termination[r]]
+    named = {}    # (status, event, end) → termination: a few kinds among many rows
+    for r, key in enumerate(zip(counts[:, 0].tolist(), counts[:, 1].tolist(), ends)):
+        if key[2] is not None:
+            if key not in named:
+                named[key] = termination(*key, reference.approximant)
+            out.termination[r] = named[key]
+            out.message[r] = TERMINATION_MESSAGES[named[key]]
     out.nsteps[:], out.nfev[:] = counts[:, 2], counts[:, 3]
     out.t_seconds[:] = out.t * M_sec
     if listed:

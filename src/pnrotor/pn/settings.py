@@ -4,15 +4,18 @@ r"""First stage of a PN run: the user's inputs, checked, converted and completed
 Quantities, GW frequencies in Hz, spins, frame, model options, sampling) into one record in geometric
 units (G = c = M = 1, :mod:`pnrotor.pn.initial`): v at f_ref, f_min and f_max, the initial rotor R₀
 (x̂, ŷ, ẑ) → (n̂, λ̂, ℓ̂), the mass ratio, the PN orders with their defaults, and the spin content
-(nonspinning, aligned or precessing) that decides which right-hand side is compiled in.  Every bad
-input is a ``ValueError`` naming the parameter and its allowed range.  No numba here: the later stages
-(:mod:`pnrotor.pn.evolve`, :mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
+(nonspinning, aligned or precessing) that decides which right-hand side is compiled in.  It does so in
+two parts: :func:`options` (the model and integration options, which the binaries of ``evolve_many`` share
+and it checks once) and :func:`binary_settings` (the binary).  Every bad input is a ``ValueError`` naming
+the parameter and its allowed range.  No numba here: the later stages (:mod:`pnrotor.pn.evolve`,
+:mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
 """
 
 import functools
 import math
 import numbers
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -49,14 +52,14 @@ class Settings:
     f_ref: float
     f_min: float
     f_max: float
-    approximant: str
-    pn_order: float
-    spin_orbit_order: float
-    spin_spin_order: float
     ell_hat: np.ndarray
     n_hat: np.ndarray
     kappa1: float
     kappa2: float
+    approximant: str    # from here to max_steps: the fields of Options, in its order
+    pn_order: float
+    spin_orbit_order: float
+    spin_spin_order: float
     atol: float
     rtol: float
     sampling: str
@@ -100,27 +103,45 @@ class Settings:
         }
 
 
+class Options(NamedTuple):
+    """The model and integration options of a run, checked (:func:`options`): what the binaries of
+    ``evolve_many`` share.  Fields as in :class:`Settings` (a NamedTuple: a frozen dataclass cost ~2 µs more per
+    run to build)."""
+
+    approximant: str
+    pn_order: float
+    spin_orbit_order: float
+    spin_spin_order: float
+    atol: float
+    rtol: float
+    sampling: str
+    sampling_value: float
+    rotor: str
+    precession_phase_shift: bool
+    integrate_rotor: bool
+    precession: str
+    max_steps: int
+
+
 def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, spin_orbit_order,
              spin_spin_order, ell_hat, n_hat, kappa1, kappa2, atol, rtol, sampling, rotor, precession_phase_shift,
              integrate_rotor, precession, max_steps):
     """Check and convert :func:`pnrotor.pn.evolve.evolve`'s arguments (its docstring has their meaning and
-    defaults) → :class:`Settings`; a ``ValueError`` naming the first bad one."""
-    m1 = _ini.solar_masses(m1, "m1")
-    m2 = _ini.solar_masses(m2, "m2")
-    f_ref = _ini.hertz(f_ref, "f_ref")
-    f_min = _ini.hertz(f_min, "f_min", allow_none=True)
-    f_max = _ini.hertz(f_max, "f_max", allow_none=True)
-    c1 = _ini.spin_vector(chi1, "chi1")
-    c2 = _ini.spin_vector(chi2, "chi2")
-    ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
+    defaults) → :class:`Settings`; a ``ValueError`` naming the first bad one (the options first)."""
+    o = options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, sampling, rotor,
+                precession_phase_shift, integrate_rotor, precession, max_steps)
+    return binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2)
+
+
+def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, sampling, rotor,
+            precession_phase_shift, integrate_rotor, precession, max_steps):
+    """:class:`Options` from ``evolve``'s keywords of the same names; a ``ValueError`` naming the first bad one."""
     approximant = normalize_approximant(approximant)
     pn_order = _order(pn_order, "pn_order", 0.0, MAX_ORDER)
     so_order = (min(pn_order, MAX_SO_ORDER) if spin_orbit_order is None
                 else _order(spin_orbit_order, "spin_orbit_order", -1.0, MAX_SO_ORDER))
     ss_order = (min(pn_order, MAX_SS_ORDER) if spin_spin_order is None
                 else _order(spin_spin_order, "spin_spin_order", -1.0, MAX_SS_ORDER))
-    kappa1 = _kappa(kappa1, "kappa1")
-    kappa2 = _kappa(kappa2, "kappa2")
     if rotor not in ROTORS:
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     mode, sval = parse_sampling(sampling)
@@ -138,12 +159,27 @@ def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, 
         precession_phase_shift = False
     if precession_phase_shift is None:
         precession_phase_shift = so_order >= 3.0
+    return Options(approximant, pn_order, so_order, ss_order, atol, rtol, mode, sval, rotor, precession_phase_shift,
+                   integrate_rotor, precession, int(max_steps))
+
+
+def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2):
+    """:class:`Settings` of one binary run with :class:`Options` ``o`` (the rest of :func:`settings`'s checks,
+    those of the binary; ``evolve_many`` checks the options once and calls this per binary)."""
+    m1 = _ini.solar_masses(m1, "m1")
+    m2 = _ini.solar_masses(m2, "m2")
+    f_ref = _ini.hertz(f_ref, "f_ref")
+    f_min = _ini.hertz(f_min, "f_min", allow_none=True)
+    f_max = _ini.hertz(f_max, "f_max", allow_none=True)
+    c1 = _ini.spin_vector(chi1, "chi1")
+    c2 = _ini.spin_vector(chi2, "chi2")
+    ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
+    kappa1 = _kappa(kappa1, "kappa1")
+    kappa2 = _kappa(kappa2, "kappa2")
     M_sec, X1, v0, v_min, v_max = _frequencies(m1, m2, f_ref, f_min, f_max)
     spin_content, c1, c2 = _spin_content(c1, c2, ell)
-    return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, approximant, pn_order, so_order, ss_order, ell, n, kappa1,
-                    kappa2, atol, rtol, mode, sval, rotor, precession_phase_shift, integrate_rotor, precession,
-                    int(max_steps), M_sec, X1, X1 * (1.0 - X1), v0, v_min, v_max,
-                    _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
+    return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, ell, n, kappa1, kappa2, *o, M_sec, X1, X1 * (1.0 - X1), v0,
+                    v_min, v_max, _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
 
 
 @functools.lru_cache(maxsize=16)
