@@ -191,7 +191,7 @@ def build_system(s, parts=None):
     else:
         rhs = _sys.rhs_precessing_instantaneous if s.precession == "instantaneous" else _sys.rhs_precessing
         events = _sys.events_precessing
-        y0 = np.concatenate(([s.v0], c1, c2, s.R0, [0.0]))
+        y0 = np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0])   # [v, χ₁, χ₂, R, Φ]
     # they cannot raise (error_model='numpy'), so they may go to the integrator by address
     return System(by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG), p, y0, kmax, bvals)
 
