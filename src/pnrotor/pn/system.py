@@ -458,7 +458,8 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
             (X1, approximant, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
              math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), rotor, bool(phase_shift), omega_l))
     head, N, D, Ep = parts
-    p = head.copy()
+    p = np.zeros(P_SIZE)
+    p[:P_NUM] = head
     p[P_VEND] = v_end
     fold = aligned_basis is not None
     b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
@@ -472,7 +473,7 @@ def _spin_independent_parts(key):
     ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives other signed zeros), rotor, phase_shift,
     omega_l), as (p head, N, D, Ê′), kept in a small LRU cache (repeated runs of one binary, or of one mass
     ratio, skip its ~50 µs of Python; code that replaces a coefficient function must call
-    ``_spin_independent_parts.cache_clear()``).  The arrays are shared: make_parameters copies p and only
+    ``_spin_independent_parts.cache_clear()``).  The arrays are shared: make_parameters copies the head and only
     reads the series."""
     X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, _, _, rotor, phase_shift, omega_l = key
     p, N, D, Ep = spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor,
@@ -483,9 +484,11 @@ def _spin_independent_parts(key):
 def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor, phase_shift, omega_l):
     """Everything :func:`make_parameters` builds that does not depend on the spins or v_end, for n binaries
     that share the options and differ in X1, κ₁, κ₂ (arrays (n,), or floats for one binary): (heads
-    (n, P_SIZE), p without v_end and the series; N, D, Ê′ (n, NK, NB, NL), the series of
-    :func:`vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
-    binary, against ~50 µs of Python floats for one, measured).  Binary i gets bitwise the numbers of a
+    (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
+    :func:`vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~5 µs per
+    binary, against ~50 µs of Python floats for one, measured).  The numbers are built with the binaries
+    last (p[j] = x is then a row) and turned binaries-first at the end (only the head of p: a transpose of all
+    of it cost 2 µs per binary).  Binary i gets bitwise the numbers of a
     call with its floats: the coefficient functions are elementwise and use only +, −, ×, / (powers are
     written as products, since numpy's x ** k is not libm's pow on every CPU)."""
     from .energy import energy_series
@@ -507,7 +510,7 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
 
     X2 = 1.0 - X1
     nu = X1 * X2
-    p = np.zeros((P_SIZE,) + np.shape(X1))    # p[j, i] of binary i: p[j] = x is cheap for one binary
+    p = np.zeros((P_NUM,) + np.shape(X1))    # p[j, i] of binary i
     p[P_X1] = X1
     p[P_X2] = X2
     p[P_NU] = nu
@@ -534,13 +537,12 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     p[P_L4] = L4 if inc["so_nnlo"] else 0.0
     p[P_SPINTOL] = SPIN_TOL
     p[P_DEN_EPS] = DEN_EPS
-    E, F = (_binaries_first(x) for x in (energy_series(X1, kappa1, kappa2), flux_series(X1, kappa1, kappa2)))
+    E, F = energy_series(X1, kappa1, kappa2), flux_series(X1, kappa1, kappa2)
     kmax, approx = np.array(kmax, dtype=np.int64), APPROXIMANTS.index(approximant)
     if np.ndim(X1) == 0:   # one binary (evolve): _vdot_series_each would cost 3.5 s more to compile, cold
-        N, D, Ep = (x[None] for x in _vdot_series(E[0], F[0], kmax, approx))
-    else:
-        N, D, Ep = _vdot_series_each(E, F, kmax, approx)
-    return _binaries_first(p), N, D, Ep
+        return (p[None],) + tuple(x[None] for x in _vdot_series(E, F, kmax, approx))
+    E, F = (np.ascontiguousarray(np.moveaxis(x, -1, 0)) for x in (E, F))
+    return (np.ascontiguousarray(p.T),) + _vdot_series_each(E, F, kmax, approx)
 
 
 @njit(cache=True)
@@ -553,11 +555,6 @@ def _vdot_series_each(E_raw, F_raw, kmax, approx):
     for i in range(E_raw.shape[0]):
         N[i], D[i], Ep[i] = _vdot_series(E_raw[i], F_raw[i], kmax, approx)
     return N, D, Ep
-
-
-def _binaries_first(x):
-    """x[..., i] of binary i (or x of one) → a contiguous array with the binaries first."""
-    return x[None] if x.ndim in (1, 3) else np.ascontiguousarray(np.moveaxis(x, -1, 0))
 
 
 _UNIT_BASIS = np.array([1.0, 0, 0, 0, 0, 0, 0, 0, 0])
