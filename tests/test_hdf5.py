@@ -91,6 +91,9 @@ def assert_identical(a, b, where="run"):
         for field in dataclasses.fields(a):
             if field.name != "dense":
                 assert_identical(getattr(a, field.name), getattr(b, field.name), f"{where}.{field.name}")
+    elif isinstance(a, np.ndarray) and a.dtype == object:   # strings: the objects, not their addresses
+        assert (a.dtype, a.shape) == (b.dtype, b.shape), where
+        assert [(type(x), x) for x in a.flat] == [(type(y), y) for y in b.flat], where
     elif isinstance(a, np.ndarray):
         assert (a.dtype, a.shape) == (b.dtype, b.shape), where
         assert a.tobytes() == b.tobytes(), where

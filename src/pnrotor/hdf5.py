@@ -1,11 +1,13 @@
-"""pnrotor's HDF5 files: run results (`FrameHistory`, `Evolution`) to and from disk, atomic and versioned.
+"""pnrotor's HDF5 files: run results (`FrameHistory`, `Evolution`, `Modes`, `PopulationTable`) to and from disk,
+atomic and versioned.
 
 This module owns the file format (documented for readers without pnrotor in docs/hdf5-schema.md) and
 every write and read of it:
 
 * `write(path, run)` stores a run dataclass: each field that is an array becomes a dataset (float64 stays
   float64; chunked with a Fletcher-32 checksum per chunk and optional gzip/lzf compression, or with
-  ``checksum=False`` and no compression contiguous, see `write`), each number, string, bool or ``None`` an
+  ``checksum=False`` and no compression contiguous, see `write`; an object array of `str` a fixed-length
+  UTF-8 dataset, stored the same way), each number, string, bool or ``None`` an
   attribute, each dict a subgroup holding its items by the same rules, each list or tuple of numbers
   a dataset marked with a ``sequence`` attribute. The ``dense`` field (the integrator's dense output, a
   function rather than data) and other callables are not written. Metadata attributes name the
@@ -65,6 +67,7 @@ KINDS = {
     "FrameHistory": "pnrotor.history:FrameHistory",
     "Evolution": "pnrotor.pn.evolve:Evolution",
     "Modes": "pnrotor.waveform.modes:Modes",
+    "PopulationTable": "pnrotor.batch.population:PopulationTable",
 }
 """The ``kind`` attribute → ``module:class`` of the dataclass it names, imported when a file is read."""
 
@@ -93,11 +96,13 @@ _TEMPORARY_SUFFIX = ".pnrotor-tmp"
 class Array(NamedTuple):
     """How an array field of a run is stored: its ``shape``, each entry an int, ``"N"`` (the number of samples,
     the same in every array of the run) or a name in `_DIMENSIONS`; its ``units`` attribute; its ``dtype``
-    (either byte order). Its values must be finite."""
+    (either byte order; ``"str"``: a numpy object array of `str`, stored as fixed-length UTF-8).  Its values
+    must be finite unless ``finite`` is False (float and complex arrays; NaN then marks an absent value)."""
 
     shape: tuple
     units: str
     dtype: str = "float64"
+    finite: bool = True
 
 
 _M = "M (G M / c^3, total mass M)"
@@ -128,14 +133,49 @@ ARRAYS = {
         "R": _ROTOR,
         "Phi": Array(("N",), "rad; orbital phase"),
     },
+    "PopulationTable": {
+        "name": Array(("N",), "the row's name (the batch table's name column, or its default name)", "str"),
+        "t": Array(("N",), _M + "; t = 0 at f_ref"),
+        "t_seconds": Array(("N",), "s; t = 0 at f_ref"),
+        "v": Array(("N",), "c; PN parameter v = (M Omega_orb)^(1/3)"),
+        "Phi": Array(("N",), "rad; orbital phase, 0 at f_ref"),
+        "chi1": Array(("N", 3), "1; dimensionless spin S1 / m1^2, inertial-frame components"),
+        "chi2": Array(("N", 3), "1; dimensionless spin S2 / m2^2, inertial-frame components"),
+        "R": _ROTOR,
+        "ell_hat": Array(("N", 3), "1; unit normal to the orbital plane, inertial-frame components"),
+        "termination": Array(("N",), "why the integration to this state stopped (f_max, f_min or the end of the "
+                             "inspiral, as pnrotor.evolve names it)", "str"),
+        "message": Array(("N",), "the termination's explanation", "str"),
+        "nsteps": Array(("N",), "step attempts of the integration that gave the state", "int64"),
+        "nfev": Array(("N",), "right-hand-side evaluations of that integration", "int64"),
+        "inputs/row": Array(("N",), "number of the row in the batch table (1 = the first binary)", "int64"),
+        "inputs/m1_Msun": Array(("N",), "Msun"),
+        "inputs/m2_Msun": Array(("N",), "Msun"),
+        "inputs/chi1": Array(("N", 3), "1; dimensionless spin of body 1 at f_ref, inertial frame"),
+        "inputs/chi2": Array(("N", 3), "1; dimensionless spin of body 2 at f_ref, inertial frame"),
+        "inputs/f_ref_Hz": Array(("N",), "Hz; GW frequency where the spins are given, t = 0"),
+        "inputs/f_min_Hz": Array(("N",), "Hz; the state is the one at this GW frequency, integrated backward "
+                                 "(NaN: no f_min)", finite=False),
+        "inputs/f_max_Hz": Array(("N",), "Hz; the state is the one at this GW frequency (NaN: no f_max; with "
+                                 "neither, the end of the inspiral)", finite=False),
+        "inputs/approximant": Array(("N",), "T1, T4 or T5", "str"),
+        "inputs/pn_order": Array(("N",), "PN order of the nonspinning terms"),
+        "inputs/spin_orbit_order": Array(("N",), "PN order of the spin-orbit terms (-1: none; NaN: pnrotor.evolve's "
+                                         "default)", finite=False),
+        "inputs/spin_spin_order": Array(("N",), "PN order of the spin-spin terms (-1: none; NaN: pnrotor.evolve's "
+                                        "default)", finite=False),
+        "inputs/precession": Array(("N",), "spin precession model", "str"),
+        "inputs/atol": Array(("N",), "absolute tolerance of the integrator"),
+    },
 }
-"""The array fields of each run kind (`Array`): what `write` and `read` check, and their ``units``."""
+"""The array fields of each run kind (`Array`): what `write` and `read` check, and their ``units``.  A name
+``GROUP/NAME`` is the array NAME of the run's dict field GROUP (a dataset of that subgroup)."""
 
 _DIMENSIONS = {"modes": lambda values: (values["ell_max"] + 1) ** 2 - 4}
 """Named dimensions of `ARRAYS` other than N, from the run's other values (checked first)."""
 
 UNITS = {kind: {name: array.units for name, array in arrays.items()} for kind, arrays in ARRAYS.items()}
-"""``units`` attribute written on a run's top-level datasets, by kind and field."""
+"""``units`` attribute written on a run's datasets of `ARRAYS`, by kind and field (``GROUP/NAME`` in a subgroup)."""
 
 _EVOLUTION_INPUTS = ("m1_Msun", "m2_Msun", "kappa1", "kappa2", "ell_hat", "n_hat", "state", "spin_content",
                      "M_seconds", "v_ref", "f_min_Hz")
@@ -340,11 +380,13 @@ def layout_problems(cls, values):
     from a dataclass) of the run dataclass `cls`, as a list of sentences (empty: nothing). Checked:
 
     * names: every field of `cls` present but those not written (`NOT_WRITTEN`, callable defaults), no other;
-    * types, by each field's annotation (`_TYPES`): ``np.ndarray`` a numeric array (a dataset), ``dict`` a
-      dict (a group), ``str``, ``int``, ``float`` such a scalar (an attribute; an int counts as a float,
-      a bool as neither), or ``None`` where that is the default; other annotations are not checked;
-    * for the kinds in `ARRAYS`, each array's dtype (either byte order) and shape, every ``"N"`` the same
-      number of samples (that of most arrays, a tie going to the first), and its values finite;
+    * types, by each field's annotation (`_TYPES`): ``np.ndarray`` a numeric array or an object array of
+      `str` (a dataset), ``dict`` a dict (a group), ``str``, ``int``, ``float`` such a scalar (an attribute; an
+      int counts as a float, a bool as neither), or ``None`` where that is the default; other annotations are
+      not checked;
+    * for the kinds in `ARRAYS`, each array's presence (``GROUP/NAME``: in the dict field GROUP), dtype (either
+      byte order) and shape, every ``"N"`` the same number of samples (that of most arrays, a tie going to the
+      first), and its values finite (where `Array.finite`);
     * for the kinds in `REQUIRED_KEYS`, the keys their dict fields must hold.
     """
     problems, kind = [], cls.__name__
@@ -361,22 +403,34 @@ def layout_problems(cls, values):
             problems.append(f"{_what(values[name])} {name!r} is {_describe(values[name])}, expected {expected}")
     if problems:
         return problems  # shapes and keys need the right fields
-    arrays = ARRAYS.get(kind, {})
-    lengths = {name: values[name].shape[spec.shape.index("N")] for name, spec in arrays.items()
-               if "N" in spec.shape and values[name].ndim == len(spec.shape)}
+    arrays = {}
+    for name, spec in ARRAYS.get(kind, {}).items():
+        group, _, key = name.rpartition("/")
+        array = values[group].get(key) if group else values[name]
+        if _TYPES["ndarray"][0](array):
+            arrays[name] = spec, array
+        else:
+            problems.append(f"dataset {name!r} is missing" if array is None else
+                            f"{_what(array)} {name!r} is {_describe(array)}, expected an array")
+    lengths = {name: array.shape[spec.shape.index("N")] for name, (spec, array) in arrays.items()
+               if "N" in spec.shape and array.ndim == len(spec.shape)}
     n, count = Counter(lengths.values()).most_common(1)[0] if lengths else (None, 0)
     like = [name for name, length in lengths.items() if length == n]
-    for name, spec in arrays.items():
-        array = values[name]
+    for name, (spec, array) in arrays.items():
         sizes = {"N": n, **{dim: size(values) for dim, size in _DIMENSIONS.items() if dim in spec.shape}}
         shape = tuple(d if sizes.get(d, d) is None else sizes.get(d, d) for d in spec.shape)
-        if array.dtype.newbyteorder("=") != np.dtype(spec.dtype):
+        if spec.dtype == "str":
+            if not _is_strings(array):
+                problems.append(f"dataset {name!r} is {_describe(array)}, expected strings")
+            elif array.shape != shape:
+                problems.append(f"dataset {name!r} has shape {_shape(array.shape)}, expected {_shape(shape)}")
+        elif array.dtype.newbyteorder("=") != np.dtype(spec.dtype):
             problems.append(f"dataset {name!r} is {array.dtype.name}, expected {np.dtype(spec.dtype).name}")
         elif array.shape != shape:
             others = f" and {count - 1} other array{'s' * (count > 2)}" if count > 1 else ""
             samples = f" (N = {n} samples, as in {like[0]!r}{others})" if lengths.get(name, n) != n else ""
             problems.append(f"dataset {name!r} has shape {_shape(array.shape)}, expected {_shape(shape)}{samples}")
-        elif not np.isfinite(array).all():
+        elif spec.finite and array.dtype.kind in "fc" and not np.isfinite(array).all():
             bad = np.argwhere(~np.isfinite(array))
             at = tuple(bad[0].tolist()) if array.ndim > 1 else int(bad[0, 0])
             problems.append(f"dataset {name!r} has {len(bad)} non-finite value{'s' * (len(bad) > 1)} "
@@ -388,8 +442,15 @@ def layout_problems(cls, values):
     return problems
 
 
+def _is_strings(value):
+    """Whether `value` is a numpy object array of `str` (how a run holds a column of strings)."""
+    return (isinstance(value, np.ndarray) and value.dtype.kind == "O"
+            and all(isinstance(x, str) for x in value.flat))
+
+
 _TYPES = {
-    "ndarray": (lambda v: isinstance(v, np.ndarray) and v.dtype.kind in _ARRAY_KINDS, "dataset", "a numeric array"),
+    "ndarray": (lambda v: isinstance(v, np.ndarray) and (v.dtype.kind in _ARRAY_KINDS or _is_strings(v)), "dataset",
+                "a numeric array or an array of strings"),
     "dict": (lambda v: isinstance(v, dict), "group", "a group"),
     "str": (lambda v: isinstance(v, str), "attribute", "a string"),
     "int": (lambda v: isinstance(v, numbers.Integral) and not isinstance(v, bool), "attribute", "an integer"),
@@ -687,8 +748,9 @@ def _put_fields(g, run, units, storage):
         if field.name in _NOT_FIELDS:
             raise ValueError(f"{cls.__name__}.{field.name}: the name is reserved for pnrotor's metadata")
         _put(g, field.name, value, storage, f"{cls.__name__}.{field.name}")
-        if field.name in units and isinstance(g.get(field.name), h5py.Dataset):
-            g[field.name].attrs["units"] = units[field.name]
+    for name, text in units.items():
+        if isinstance(g.get(name), h5py.Dataset):
+            g[name].attrs["units"] = text
 
 
 def _put(g, name, value, storage, where):
@@ -699,6 +761,8 @@ def _put(g, name, value, storage, where):
         for key, item in value.items():
             _check_name(key, f"key of {where}")
             _put(sub, key, item, storage, f"{where}[{key!r}]")
+    elif _is_strings(value):
+        _dataset(g, name, _utf8(value, where), *storage)
     elif isinstance(value, np.ndarray) or type(value) in _SEQUENCES.values():
         try:
             array = np.asarray(value)
@@ -716,6 +780,17 @@ def _put(g, name, value, storage, where):
             raise ValueError(f"cannot write {where} = {value!r}: {error}") from None
     else:
         raise TypeError(f"{where}: cannot write a {type(value).__name__}")
+
+
+def _utf8(strings, where):
+    """An object array of `str` as the fixed-length UTF-8 array h5py stores (HDF5 pads with NULs, so a string may
+    not hold one): fixed-length data are chunked and checksummed like numbers, variable-length strings would
+    live in HDF5's global heap, which has no checksum."""
+    encoded = [x.encode("utf-8", "surrogatepass") for x in strings.flat]
+    if any(b"\0" in x for x in encoded):
+        raise ValueError(f"cannot write {where}: its strings may not contain NUL characters")
+    dtype = h5py.string_dtype("utf-8", max(1, max(map(len, encoded), default=1)))
+    return np.array(encoded, dtype=dtype).reshape(strings.shape)
 
 
 def _dataset(g, name, array, compression, checksum):
@@ -896,6 +971,8 @@ def _get(g, skip=()):
     for name, item in g.items():
         if isinstance(item, h5py.Group):
             values[name] = _get(item)
+        elif h5py.check_string_dtype(item.dtype) is not None:   # an array of strings (`_utf8`)
+            values[name] = item.asstr()[...]
         else:
             array = item[...]
             sequence = item.attrs.get("sequence")

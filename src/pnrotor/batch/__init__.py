@@ -5,6 +5,8 @@ runs start, ``plan(…)`` then ``Plan.run()``) is what ``pnrotor evolve --batch`
 
 * :mod:`~pnrotor.batch.table` — the CSV/TOML file → rows of `pnrotor.evolve` keywords, checked first;
 * :mod:`~pnrotor.batch.backends` — serial, local worker processes or a Dask cluster;
+* :mod:`~pnrotor.batch.population` — the population mode (``--population``): final states only, by
+  `pnrotor.evolve_many`, into one file of columns instead of a group per run;
 * here — the writer.  Every finished run is on disk at once, in the folder ``OUTPUT.parts`` beside the
   output: local workers write their runs into part files there, and this process writes those of the
   serial and Dask backends.  When every row is done, this process alone assembles the batch file with
@@ -29,13 +31,14 @@ from pathlib import Path
 from pnrotor.batch import backends
 from pnrotor.batch.table import COLUMNS, DEFAULTS, REQUIRED, Row, default_name, read_batch
 
-__all__ = ["plan", "run", "Plan", "Outcome", "Row", "read_batch", "default_name", "COLUMNS", "DEFAULTS", "REQUIRED"]
+__all__ = ["plan", "run", "Plan", "Outcome", "Row", "read_batch", "default_name", "check_output", "COLUMNS", "DEFAULTS",
+           "REQUIRED"]
 
 
 @dataclass(eq=False)
 class Outcome:
-    """What a batch did: its rows (failures in ``row.error``), the brief of each written run by row index,
-    the file (None if no run succeeded), and times."""
+    """What a batch did: its rows (failures in ``row.error``), the brief of each written run by row index
+    (none for a population, `pnrotor.batch.population`), the file (None if no run succeeded), and times."""
 
     rows: list
     briefs: dict
@@ -190,11 +193,7 @@ def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compressi
     if jobs < 1:
         raise ValueError(f"jobs must be at least 1, got {jobs}")
     rows = table if isinstance(table, list) else read_batch(table, defaults or {})
-    path = Path(output)
-    if path.is_dir():
-        raise IsADirectoryError(f"{path} is a folder; give a file name for the batch")
-    if path.exists() and not overwrite:
-        raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
+    path = check_output(output, overwrite)
     wave = None
     if modes is not None:
         from pnrotor.waveform.modes import check_arguments
@@ -210,6 +209,16 @@ def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compressi
         raise FileExistsError(f"{result.parts} holds the finished runs of an interrupted batch: pass --resume "
                               "(resume=True) to complete it, or remove the folder")
     return result
+
+
+def check_output(output, overwrite):
+    """The batch file `output` as a Path, checked before anything runs: not a folder, new unless `overwrite`."""
+    path = Path(output)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path} is a folder; give a file name for the batch")
+    if path.exists() and not overwrite:
+        raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
+    return path
 
 
 def run(table, output, *, progress=False, **options):

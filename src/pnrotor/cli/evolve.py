@@ -21,6 +21,13 @@ which this module calls.
 A row that fails (bad value, evolve's ``ValueError``) is listed with its row number and message and
 the others are still written; exit status 1 then, 2 when the batch file itself is unusable.
 
+Population: ``pnrotor evolve --batch params.csv --population`` computes only each row's final state (an empty
+sampling cell means final), all together with `pnrotor.evolve_many` (one compiled parallel loop per group
+of rows sharing its shared options), and writes them as one table of columns, a `PopulationTable`
+(`pnrotor.batch.population`, which this module calls): the state at f_max, at f_min (integrated backward)
+or at the end of the inspiral.  Options of the other batch modes (--jobs, --scheduler, --resume, the modes)
+are usage errors with it; -o, --overwrite, the storage options and the exit status are as for batches.
+
 The PN code (numba) is imported only when a run starts, so that the CLI starts quickly.
 """
 
@@ -34,6 +41,10 @@ from pnrotor.cli import UsageError
 
 DEFAULT_FOLDER = "waveforms"
 PRECESSION = ("averaged", "averaged_varpi", "instantaneous")
+ELL_MAX, AMPLITUDE_ORDER = 8, 3.5
+"""--ell-max and --amplitude-order when not given (`pnrotor.modes`' defaults)."""
+NOT_WITH_POPULATION = ("jobs", "scheduler", "resume", "modes", "ell_max", "amplitude_order", "distance")
+"""Options of the other batch modes, refused with --population."""
 
 
 def add_parser(subparsers):
@@ -84,9 +95,9 @@ def add_parser(subparsers):
                        help="also compute the modes h_lm (pnrotor.modes) and write the file with two groups, "
                        "run and modes (with --batch: NAME and NAME.modes per row); for a waveform sample finely "
                        "(--sampling 1/4096 or per_orbit:16): the default steps are far apart")
-    waves.add_argument("--ell-max", type=int, default=8, metavar="L", help="modes l = 2 ... L, L <= 8 (default 8)")
-    waves.add_argument("--amplitude-order", type=float, default=3.5, metavar="A",
-                       help="PN amplitude order 0, 0.5, ..., 3.5 (default 3.5)")
+    waves.add_argument("--ell-max", type=int, metavar="L", help=f"modes l = 2 ... L, L <= 8 (default {ELL_MAX})")
+    waves.add_argument("--amplitude-order", type=float, metavar="A",
+                       help=f"PN amplitude order 0, 0.5, ..., 3.5 (default {AMPLITUDE_ORDER})")
     waves.add_argument("--distance", type=float, metavar="MPC",
                        help="store the modes as strain at this distance in Mpc (default: r h / M)")
     output.add_argument("-q", "--quiet", action="store_true",
@@ -99,6 +110,12 @@ def add_parser(subparsers):
                        help="complete an interrupted batch from the finished runs kept in OUTPUT.parts")
     batch.add_argument("--scheduler", metavar="ADDRESS",
                        help="run the batch on this Dask scheduler (e.g. tcp://host:8786); needs pnrotor[dask]")
+    batch.add_argument("--population", action="store_true",
+                       help="final states only, for population synthesis: every row computed together by "
+                       "pnrotor.evolve_many (numba's threads; 25-38x the rows/s of a group per run) and written as "
+                       "one table, a column per quantity (docs/hdf5-schema.md); each row's state at f_max, at "
+                       "f_min (integrated backward) or at the end of the inspiral; sampling must be final (an "
+                       "empty cell means final); not with --jobs, --scheduler, --resume or --modes")
     parser.set_defaults(func=run)
 
 
@@ -116,8 +133,9 @@ def _warn_if_cold(here=True):
 
 
 def run(args):
-    if args.resume and args.batch is None:
-        raise UsageError("--resume applies to --batch runs only")
+    for option in ("resume", "population"):
+        if getattr(args, option) and args.batch is None:
+            raise UsageError(f"--{option} applies to --batch runs only")
     if args.batch is not None:
         return _run_batch(args)
     for option in ("jobs", "scheduler"):
@@ -165,7 +183,7 @@ def _run_one(args):
     if args.modes:
         from pnrotor.waveform import modes
 
-        wave_options = modes.check_arguments(args.ell_max, args.amplitude_order, args.distance)
+        wave_options = modes.check_arguments(*_modes_options(args))
 
     _warn_if_cold()
     run = backends.evolve_row(params)
@@ -190,6 +208,12 @@ def _run_one(args):
                   + " (groups run and modes)")
     print(f"wrote {path}")
     return 0
+
+
+def _modes_options(args):
+    """(ell_max, amplitude_order, distance) of the command line, the defaults filled in."""
+    return (ELL_MAX if args.ell_max is None else args.ell_max,
+            AMPLITUDE_ORDER if args.amplitude_order is None else args.amplitude_order, args.distance)
 
 
 def _orbits_text(orbits, exact):
@@ -235,27 +259,34 @@ def _sampling_text(inputs):
 # --------------------------------------------------------------------------------------------------
 
 
+def _table_defaults(args):
+    """The model options of the command line, the defaults of a batch table's empty cells (None: not given)."""
+    defaults = {key: getattr(args, key) for key in DEFAULTS}
+    if defaults["sampling"] is not None:
+        defaults["sampling"] = parse_sampling(defaults["sampling"])
+    return defaults
+
+
 def _run_batch(args):
     start = time.perf_counter()
     for option in ("m1", "m2", "chi1", "chi2", "f_ref"):
         if getattr(args, option) is not None:
             raise UsageError(f"--{option.replace('_', '-')} cannot be combined with --batch; give it as the column "
                              f"{option} of the batch file")
+    if args.population:
+        return _run_population(args, start)
     if args.jobs is not None and args.scheduler is not None:
         raise UsageError("--jobs applies to local runs; a Dask cluster (--scheduler) sets its own parallelism")
     if args.jobs is not None and args.jobs < 1:
         raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
     from pnrotor import batch
 
-    defaults = {key: getattr(args, key) for key in DEFAULTS}
-    if defaults["sampling"] is not None:
-        defaults["sampling"] = parse_sampling(defaults["sampling"])
-    rows = batch.read_batch(args.batch, defaults)
+    rows = batch.read_batch(args.batch, _table_defaults(args))
     path, default_folder = _output_path(args, Path(args.batch).stem)
     plan = batch.plan(rows, path, jobs=args.jobs, scheduler=args.scheduler, overwrite=args.overwrite,
                       compression=args.compression, checksum=args.checksum, create_folder=default_folder,
                       resume=args.resume,
-                      modes=(args.ell_max, args.amplitude_order, args.distance) if args.modes else None)
+                      modes=_modes_options(args) if args.modes else None)
     if not args.quiet:
         bad = len(plan.rows) - len(plan.tasks)
         print(f"pnrotor evolve --batch {args.batch}: {len(plan.rows)} binaries"
@@ -272,6 +303,38 @@ def _run_batch(args):
     written = f"wrote {count} run{'s' * (count != 1)} to {path}" if count else "wrote no file"
     print(f"{written}; {len(outcome.failed)} failed; {wall:.3g} s in all ({outcome.evolve_seconds:.3g} s evolving, "
           f"{count / wall:.3g} runs/s)")
+    return 1 if outcome.failed else 0
+
+
+def _run_population(args, start):
+    given = [f"--{option.replace('_', '-')}" for option in NOT_WITH_POPULATION
+             if getattr(args, option) not in (None, False)]
+    if given:
+        raise UsageError(f"{', '.join(given)} cannot be combined with --population (one process computes the final "
+                         "states, on numba's threads; no histories, so no modes)")
+    defaults = _table_defaults(args)
+    if defaults["sampling"] not in (None, "final"):
+        raise UsageError(f"--sampling must be final with --population (final states only), got {args.sampling!r}")
+    from pnrotor.batch import population
+
+    path, default_folder = _output_path(args, Path(args.batch).stem)
+    plan = population.plan(args.batch, path, overwrite=args.overwrite, compression=args.compression,
+                           checksum=args.checksum, defaults=defaults, create_folder=default_folder)
+    if not args.quiet:
+        bad = sum(row.error is not None for row in plan.rows)
+        groups = len(plan.groups)
+        print(f"pnrotor evolve --batch {args.batch} --population: {len(plan.rows)} binaries"
+              + (f" ({bad} with bad values)" if bad else "")
+              + f", final states by evolve_many in {groups} call{'s' * (groups != 1)}")
+    _warn_if_cold(here=False)
+    outcome = plan.run()
+    for row in outcome.failed:
+        print(f"  FAILED {row!r}: {row.error}")
+    wall = time.perf_counter() - start
+    count = outcome.written
+    written = f"wrote {count} final state{'s' * (count != 1)} to {path}" if count else "wrote no file"
+    print(f"{written}; {len(outcome.failed)} failed; {wall:.3g} s in all ({outcome.evolve_seconds:.3g} s evolving, "
+          f"{count / wall:.3g} rows/s)")
     return 1 if outcome.failed else 0
 
 

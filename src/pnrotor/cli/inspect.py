@@ -4,7 +4,8 @@ For one run: its kind, schema and pnrotor version, creation time, the sample cou
 array (shape, dtype, units), every scalar and every dict field (inputs, statistics) with exact values,
 then a short summary — for post-Newtonian runs the duration in M and s, the number of orbits ΔΦ/2π,
 the first and final v and the termination; for frame histories the formulation, method, tolerances,
-status and integrator work. For a batch file: its runs, or one run with ``--group``.
+status and integrator work; for a population file (`PopulationTable`) the count of each termination. For a
+batch file: its runs, or one run with ``--group``.
 
 numpy and h5py are imported only when the command runs, so that the CLI starts quickly.
 """
@@ -55,7 +56,7 @@ def describe(path, group=None):
         f"  pnrotor schema {meta['pnrotor_schema']}, written by pnrotor {meta['pnrotor_version']}, created {meta['created']}",
     ]
     t = getattr(result, "t", None)
-    if isinstance(t, np.ndarray) and t.ndim == 1:
+    if isinstance(t, np.ndarray) and t.ndim == 1 and not _is_population(result):
         span = f", t from {t[0].item()!r} to {t[-1].item()!r}" if t.size else ""
         lines.append(f"  {t.size} samples{span}")
 
@@ -75,8 +76,21 @@ def describe(path, group=None):
     return lines
 
 
+def _is_population(result):
+    """Whether `result` holds one state per binary (a `PopulationTable`): a termination per row."""
+    import numpy as np
+
+    return isinstance(getattr(result, "termination", None), np.ndarray)
+
+
 def summary(result):
     """A few lines that say what the run did, from its fields (duck-typed, so any run kind works)."""
+    if _is_population(result):
+        from collections import Counter
+
+        counts = Counter(result.termination.tolist()).most_common()
+        return [f"{len(result.termination)} final states, one per binary",
+                "terminations: " + ", ".join(f"{name} {count}" for name, count in counts)]
     t, v, Phi = (getattr(result, name, None) for name in ("t", "v", "Phi"))
     if v is not None and Phi is not None:
         if t.size == 0:
