@@ -17,11 +17,14 @@ that are the same at every sample (aligned ones) are folded into the coefficient
 frame into each sample's orbital frame, χ' = R⁻¹ χ R — then per ℓ the amplitudes and, without writing them
 out, the rotation to the inertial frame: H itself (co-orbital), H_ℓm e^{−imΦ} (a nonprecessing run in its
 own frame) or 𝔇(R) H (:func:`pnrotor.waveform.wigner._rotate_ell`, only the columns m' with terms).
-Measured (benchmarks/bench_modes.py, shared two-core machine), modes() per sample: precessing runs ~130–160 ns
-for ℓ ≤ 4 at 1.5PN and ~430–500 ns for ℓ ≤ 8 at 3.5PN (~500–600 with d's elements formed per sample, ~400 and
-~1,500 ns for amplitudes and rotation as two passes over an H array); nonprecessing runs ~40–100 and ~210–300
-ns, against ~140–280 and ~500–700 ns.  The kernel is one compiled function for every frame (~5.5 s to compile on
-a cold cache).  It holds the block
+For a precessing run the sums and differences H_ℓm' ± H_ℓ,−m' that the rotation's first product takes are formed
+as H_ℓ,±m' are (:func:`_mirror`).  Only the powers of v and the spin quantities some term needs are formed.
+Measured (benchmarks/bench_modes.py, shared two-core machine), modes() per sample: precessing runs ~100–140 ns
+for ℓ ≤ 4 at 1.5PN and ~340–460 ns for ℓ ≤ 8 at 3.5PN (~130–160 and ~430–500 before the rotors were copied to
+rows and the sums folded into :func:`_mirror`; ~500–600 with d's elements formed per sample, ~400 and ~1,500 ns
+for amplitudes and rotation as two passes over an H array); nonprecessing runs ~60–120 and ~190–240 ns, against
+~140–280 and ~500–700 ns.  The kernel is one compiled function for every frame (~6.5–7 s to compile on a cold
+cache).  It holds the block
 functions of :mod:`~pnrotor.waveform.wigner` and :func:`pnrotor.quaternion.qrotate_into` (numba caches it per
 source file): after editing those, remove this module's ``__pycache__/amplitudes.*.nb*``.
 """
@@ -34,8 +37,8 @@ from numba import njit
 from pnrotor.quaternion import qrotate_into
 from pnrotor.waveform import nonspinning, spin
 from pnrotor.waveform.layout import ell_m, mode_index, n_modes
-from pnrotor.waveform.wigner import (_CHUNK, _phase_powers, _rotate_ell, _rotation_scratch, _rotor_block, _store,
-                                     rotation_plan)
+from pnrotor.waveform.wigner import (_CHUNK, _phase_powers, _rotate_ell, _rotation_scratch, _rotor_block,
+                                     _rotor_rows, _store, rotation_plan)
 
 __all__ = ["table", "coorbital_modes", "modes_in_frame", "H0"]
 
@@ -44,6 +47,8 @@ H0 = 8.0 * np.sqrt(np.pi / 5.0)
 
 _Q_ONE, _Q_LOG = 0, 1
 _Q_SPIN = {name: 2 + j for j, name in enumerate(spin.BASIS)}
+_Q_P = _Q_SPIN["P_nn"]
+"""The first quadratic quantity: those from here on only if a term needs them."""
 N_Q = 2 + len(spin.BASIS)
 _FRAME_CODES = {"coorbital": 0, "z": 1, "rotors": 2}
 """The frames :func:`_sum` gives the modes in: H, H_ℓm e^{−imΦ} for R = exp(Φẑ/2), 𝔇(R) H."""
@@ -104,21 +109,27 @@ def _real_terms(nu, delta, ell_max, order2, spins, constants):
 
 
 @njit(cache=True, fastmath={"contract"})
-def _add_term(x, c, p, q, nb):
-    """x += c p q (a loop of its own, as the block loops of :mod:`pnrotor.waveform.wigner`)."""
+def _add_term(X, t, c, p, k, Q, q, nb):
+    """Row t of X += c (row k of p) (row q of Q) (a loop of its own, as the block loops of
+    :mod:`pnrotor.waveform.wigner`, on whole arrays and row indices as they are)."""
     for s in range(nb):
-        x[s] += c * p[s] * q[s]
+        X[t, s] += c * p[k, s] * Q[q, s]
 
 
 @njit(cache=True, fastmath={"contract"})
-def _spin_block(chi, nb, X1, X2, kappa1, kappa2, Q):
+def _spin_block(chi, nb, X1, X2, kappa1, kappa2, quadratic, Q):
     """Rows 2 … of Q: the spin basis of :mod:`pnrotor.waveform.spin` from the rows χ₁ₙ, χ₁λ, χ₁ℓ, χ₂ₙ, χ₂λ, χ₂ℓ
-    of chi, for nb samples."""
+    of chi, for nb samples (P and Q, rows 8 …, only if ``quadratic``)."""
     for a in range(3):
         for s in range(nb):
             c1, c2 = chi[a, s], chi[3 + a, s]
             Q[2 + a, s] = X1 * X1 * c1 + X2 * X2 * c2
             Q[5 + a, s] = X2 * c2 - X1 * c1
+    if not quadratic:
+        return
+    for a in range(3):
+        for s in range(nb):
+            c1, c2 = chi[a, s], chi[3 + a, s]
             Q[8 + a, s] = kappa1 * X1 * X1 * c1 * c1 + 2.0 * X1 * X2 * c1 * c2 + kappa2 * X2 * X2 * c2 * c2
     j = 11
     for a in range(3):
@@ -131,58 +142,64 @@ def _spin_block(chi, nb, X1, X2, kappa1, kappa2, Q):
 
 
 @njit(cache=True, fastmath={"contract"})
-def _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, X1, X2, kappa1, kappa2, p, Q, chi, c):
-    """Of samples i0 … i0+nb−1: p[k] = h₀ v^k, Q[1] = ln v if ``logs``, and with ``spins`` (1: co-orbital
-    components given, 2: inertial ones, taken into the frame of R) the spin basis (chi: block scratch, c: (3,))."""
+def _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, quadratic, X1, X2, kappa1, kappa2, p, Q, chi, x, c):
+    """Of samples i0 … i0+nb−1: p[k] = h₀ v^k (the rows p has), Q[1] = ln v if ``logs``, and with ``spins`` (1:
+    co-orbital components given, 2: inertial ones, taken into the frame of R) the spin basis, its quadratic part
+    if ``quadratic`` (chi: block scratch; x, c: (3,), a spin and its rotation)."""
+    v = v[i0:i0 + nb]   # indexed by the loop's own s (an index i0 + s keeps LLVM from vectorizing a loop)
     for s in range(nb):
-        vi = v[i0 + s]
-        p[0, s] = h0 * vi * vi
+        p[0, s] = h0 * v[s] * v[s]
     for k in range(1, p.shape[0]):
         for s in range(nb):
-            p[k, s] = p[k - 1, s] * v[i0 + s]
+            p[k, s] = p[k - 1, s] * v[s]
     if logs:
         for s in range(nb):
-            Q[1, s] = np.log(v[i0 + s])
+            Q[1, s] = np.log(v[s])
     if not spins:
         return
     for s in range(nb):
         i = i0 + s
         for body in range(2):
-            x = chi1[i] if body == 0 else chi2[i]
+            spin = chi1 if body == 0 else chi2
+            x[0], x[1], x[2] = spin[i, 0], spin[i, 1], spin[i, 2]
             if spins == 2:
                 qrotate_into(R[i, 0], -R[i, 1], -R[i, 2], -R[i, 3], x, c)   # χ' = R⁻¹ χ R
-                chi[3 * body, s], chi[3 * body + 1, s], chi[3 * body + 2, s] = c[0], c[1], c[2]
-            else:
-                chi[3 * body, s], chi[3 * body + 1, s], chi[3 * body + 2, s] = x[0], x[1], x[2]
-    _spin_block(chi, nb, X1, X2, kappa1, kappa2, Q)
+                x[0], x[1], x[2] = c[0], c[1], c[2]
+            chi[3 * body, s], chi[3 * body + 1, s], chi[3 * body + 2, s] = x[0], x[1], x[2]
+    _spin_block(chi, nb, X1, X2, kappa1, kappa2, quadratic, Q)
 
 
 @njit(cache=True, fastmath={"contract"})
-def _ell_amplitudes(ell, lo, hi, target, k, q, c, p, Q, e_re, e_im, X, nb):
+def _ell_amplitudes(ell, lo, hi, target, k, q, c, p, Q, e_re, e_im, fold, X, nb):
     """Rows ℓ + m of X (real parts; imaginary parts 2 ell_max + 1 rows further) = e^{−imφ} H_ℓm of the block for
     the phase factors e^{−iφ}, e^{−2iφ}, … in rows 1, 2, … of (e_re, e_im), from the real terms lo … hi−1: S_ℓm
     and A_ℓm summed into rows ℓ + m and ℓ − m, then (:func:`_mirror`) H_ℓm = S + A, H_ℓ,−m = (−1)^ℓ (S − A)*
-    with their phases in place."""
+    with their phases in place (with ``fold``, their sums and differences)."""
     n = X.shape[0] // 2
     for r in range(2 * ell + 1):
         for s in range(nb):
             X[r, s] = X[n + r, s] = 0.0
     for j in range(lo, hi):
-        _add_term(X[target[j]], c[j], p[k[j]], Q[q[j]], nb)
+        _add_term(X, target[j], c[j], p, k[j], Q, q[j], nb)
     sig = 1.0 - 2.0 * (ell % 2)
     for m in range(1, ell + 1):
-        _mirror(X[ell + m], X[n + ell + m], X[ell - m], X[n + ell - m], e_re[m], e_im[m], sig, nb)
+        _mirror(X, ell + m, ell - m, n, e_re, e_im, m, sig, fold, nb)
 
 
 @njit(cache=True, fastmath={"contract"})
-def _mirror(h_re, h_im, hn_re, hn_im, e_re, e_im, sig, nb):
-    """(h, hn) = (e (S + A), e* sig (S − A)*) = (U + V, sig (U − V)*) with U = e S, V = e A, from (S, A) = (h, hn),
-    complex numbers as (re, im) rows (a loop of its own: LLVM vectorizes it here, not inline)."""
+def _mirror(X, rp, rn, n, e_re, e_im, m, sig, fold, nb):
+    """(h, hn) = (e (S + A), e* sig (S − A)*) = (U + V, sig (U − V)*) with U = e S, V = e A, from (S, A) = (h, hn):
+    h, hn the rows rp, rn of X (real parts; imaginary parts n rows further), e row m of (e_re, e_im) (a loop of
+    its own: LLVM vectorizes it here, not inline); with ``fold``, their sum and difference h ± hn instead, as the
+    rotation's first product takes them (:func:`pnrotor.waveform.wigner._rotate_ell`)."""
     for s in range(nb):
-        er, ei, sr, si, ar, ai = e_re[s], e_im[s], h_re[s], h_im[s], hn_re[s], hn_im[s]
+        er, ei, sr, si, ar, ai = e_re[m, s], e_im[m, s], X[rp, s], X[n + rp, s], X[rn, s], X[n + rn, s]
         ur, ui, vr, vi = er * sr - ei * si, er * si + ei * sr, er * ar - ei * ai, er * ai + ei * ar
-        h_re[s], h_im[s] = ur + vr, ui + vi
-        hn_re[s], hn_im[s] = sig * (ur - vr), sig * (vi - ui)
+        hr, hi, nr, ni = ur + vr, ui + vi, sig * (ur - vr), sig * (vi - ui)
+        if fold:
+            X[rp, s], X[n + rp, s], X[rn, s], X[n + rn, s] = hr + nr, hi + ni, hr - nr, hi - ni
+        else:
+            X[rp, s], X[n + rp, s], X[rn, s], X[n + rn, s] = hr, hi, nr, ni
 
 
 @njit(cache=True)
@@ -194,9 +211,11 @@ def _sum(v, chi1, chi2, R, spins, frame, h0, scale, logs, X1, X2, kappa1, kappa2
     :func:`pnrotor.waveform.wigner.rotation_plan`'s)."""
     B = _CHUNK
     n = 2 * ell_max + 1
-    p, Q, chi, cs = np.empty((8, B)), np.ones((N_Q, B)), np.empty((6, B)), np.empty(3)
+    p = np.empty((1 + (k.max() if k.size else 0), B))   # the powers of v up to the highest of a term
+    Q, chi, xs, cs = np.ones((N_Q, B)), np.empty((6, B)), np.empty(3), np.empty(3)
+    quadratic = np.any(q >= _Q_P)
     X = np.empty((2 * n, B))
-    eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = _rotation_scratch(ell_max, B)
+    rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = _rotation_scratch(ell_max, B)
     one_re, one_im = np.ones((ell_max + 1, B)), np.zeros((ell_max + 1, B))
     H_re, H_im = X[:n], X[n:]
     # the phases of the amplitudes ((i e^{−iγ})^m', e^{−imΦ} or 1) and of the stored modes ((−i e^{−iα})^m or 1)
@@ -204,27 +223,27 @@ def _sum(v, chi1, chi2, R, spins, frame, h0, scale, logs, X1, X2, kappa1, kappa2
         (eg_re, eg_im, one_re, one_im) if frame == 1 else (one_re, one_im, one_re, one_im))
     for i0 in range(0, v.size, B):
         nb = min(B, v.size - i0)
-        _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, X1, X2, kappa1, kappa2, p, Q, chi, cs)
+        _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, quadratic, X1, X2, kappa1, kappa2, p, Q, chi, xs,
+                      cs)
         if frame == 2:
-            _rotor_block(R, i0, nb, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
+            _rotor_block(R, i0, nb, rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
         elif frame == 1:   # e^{−imΦ}: e^{−iΦ} = (w − iz)² / (w² + z²) for R = exp(Φẑ/2) = (w, 0, 0, z)
+            _rotor_rows(R, i0, nb, rq)
             for s in range(nb):
-                w, z = R[i0 + s, 0], R[i0 + s, 3]
+                w, z = rq[0, s], rq[3, s]
                 n2 = w * w + z * z
-                eg_re[0, s], eg_im[0, s] = 1.0, 0.0
                 eg_re[1, s], eg_im[1, s] = (w * w - z * z) / n2, -2.0 * w * z / n2
             _phase_powers(eg_re, eg_im, nb)
         for ell in range(2, ell_max + 1):
-            _ell_amplitudes(ell, ell_start[ell], ell_start[ell + 1], target, k, q, c, p, Q, in_re, in_im, X, nb)
+            _ell_amplitudes(ell, ell_start[ell], ell_start[ell + 1], target, k, q, c, p, Q, in_re, in_im, frame == 2,
+                            X, nb)
             o_re, o_im = H_re, H_im
             if frame == 2:
-                _rotate_ell(ell, columns[ell], first, rows, coefs, eb_re, eb_im, H_re, H_im, y_re, y_im, h_re, h_im,
-                            nb)
+                _rotate_ell(ell, columns, first, rows, coefs, eb_re, eb_im, H_re, H_im, y_re, y_im, h_re, h_im, nb)
                 o_re, o_im = h_re, h_im
             first_row = mode_index(ell, -ell)
             for r in range(2 * ell + 1):
-                _store(o_re[r], o_im[r], out_re[abs(r - ell)], out_im[abs(r - ell)], r < ell, scale,
-                       out[first_row + r, 2 * i0:], nb)
+                _store(o_re, o_im, r, out_re, out_im, abs(r - ell), r < ell, scale, out, first_row + r, i0, nb)
 
 
 def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None, frame="coorbital",
@@ -246,7 +265,7 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
     if constant:
         Q = np.ones((N_Q, 1))
         _spin_block(np.concatenate((chi1, chi2)).astype(np.float64).reshape(6, 1), 1, X1, X2, float(kappa1),
-                    float(kappa2), Q)
+                    float(kappa2), True, Q)
         constants = tuple(Q[:, 0].tolist())
     ell_start, target, k, q, c, columns, plan = _real_terms(nu, delta, int(ell_max), int(order2), chi1 is not None,
                                                               constants)

@@ -43,17 +43,19 @@ Layout of the computation: the modes are (n_modes, N) arrays, each mode's sample
 samples are taken in blocks of ``_CHUNK``; within a block every loop runs over the samples innermost, each in
 a small function of its own (LLVM vectorizes them there, not inline), so each is plain contiguous real
 arithmetic.  Per block :func:`_rotor_block` forms e^{iμβ}, (−i e^{−iα})^m and (i e^{−iγ})^m by recurrences in
-μ and m; then per ℓ :func:`_rotate_ell` forms the sums and differences of G_m' = (i e^{−iγ})^m' H_ℓm', the
-first product (passes of :func:`rotation_plan`, each adding two terms of A and two of B to the rows ±μ,
-:func:`_pass`), the phases e^{±iμβ} with the sums and differences of the result, and the second product; the
-caller applies (i e^{−iγ})^m' before and (−i e^{−iα})^m as it stores h (:func:`_store`).  Columns m' whose H_ℓm'
-vanish identically are left out of the first product.  :func:`rotate_modes` (:func:`_rotate`) reads H from an
-array, and :func:`wigner_D` is it applied to the columns of the identity;
-:func:`pnrotor.waveform.amplitudes.modes_in_frame` forms H block by block in the same pass instead, with its
-phases (i e^{−iγ})^m' (no H array, no pass of its own for either phase).  Measured for 25,220 samples of a
-precessing run (one shared core): :func:`rotate_modes` ~0.12–0.15 µs per sample for ℓ ≤ 4 and ~0.6 µs for ℓ ≤ 8,
-against ~0.15 and ~0.8 µs with d's elements formed per sample from Wigner's sum (and 0.6 and 3.0 µs for the
-per-sample version before that); what remains is mostly loads and stores of the blocks' rows.
+μ and m (from the rotors copied to rows first: a loop that indexes R[i0 + s] or any array at i0 + s is left
+scalar by LLVM); then per ℓ :func:`_rotate_ell` takes the sums and differences G_m' ± G_−m' of
+G_m' = (i e^{−iγ})^m' H_ℓm', does the first product (passes of :func:`rotation_plan`, each adding up to three terms
+of A and three of B to the rows ±μ, :func:`_pass`), the phases e^{±iμβ} with the sums and differences of the
+result, and the second product; the caller applies (i e^{−iγ})^m' and forms G_m' ± G_−m' before, and applies
+(−i e^{−iα})^m as it stores h (:func:`_store`).  Columns m' whose H_ℓm' vanish identically are left out of the
+first product.  :func:`rotate_modes` (:func:`_rotate`) reads H from an array, and :func:`wigner_D` is it applied to
+the columns of the identity; :func:`pnrotor.waveform.amplitudes.modes_in_frame` forms H block by block in the
+same pass instead, with its phases (i e^{−iγ})^m' and the sums and differences (no H array, no pass of its own
+for either).  Measured for 25,220 samples of a precessing run (one shared core): :func:`rotate_modes` ~0.12–0.15 µs
+per sample for ℓ ≤ 4 and ~0.6 µs for ℓ ≤ 8, against ~0.15 and ~0.8 µs with d's elements formed per sample from
+Wigner's sum (and 0.6 and 3.0 µs for the per-sample version before that); what remains is mostly loads and
+stores of the blocks' rows.
 """
 
 from fractions import Fraction
@@ -90,8 +92,10 @@ def rotation_plan(columns):
     """The passes of :func:`_rotate_ell` for columns[ℓ, |m'|] (ℓ = 0 … ℓ_max; false where H_ℓ,±m' vanish):
     ``(first, rows, coefs)``, the passes of ℓ's first product (over m') ``first[2ℓ] : first[2ℓ+1]`` and of its
     second (over m'') ``first[2ℓ+1] : first[2ℓ+2]``; pass k adds to the rows (rows[k, 0], rows[k, 1]) = (ℓ + μ,
-    ℓ − μ) of its output (the spare row 2ℓ_max + 1 for μ = 0), from the rows rows[k, 2:6] of its input with the
-    weights coefs[k] (:func:`_pass`), and rows[k, 6] is 1 if it adds to what earlier passes wrote."""
+    ℓ − μ) of its output (the spare row 2ℓ_max + 1 for μ = 0), from the rows rows[k, 2:8] of its input with the
+    weights coefs[k] (:func:`_pass`; three terms of A and three of B: one pass per μ for ℓ ≤ 5, two for ℓ ≤ 8,
+    ~2 ns per sample less than two and two for ℓ ≤ 4, measured), and rows[k, 8] is 1 if it adds to what earlier
+    passes wrote."""
     return _plan(columns.shape[0] - 1, columns.tobytes())
 
 
@@ -111,94 +115,111 @@ def _plan(ell_max, columns):
                 for nu in range(ell + 1):
                     if present[nu] and weights[mu, nu] != 0.0:
                         terms[(ell + nu) % 2].append((ell - nu if odd_row else ell + nu, weights[mu, nu]))
-                for k in range(max(1, (len(terms[0]) + 1) // 2, (len(terms[1]) + 1) // 2)):
-                    picked = [t[j] if j < len(t) else (ell, 0.0) for j in (2 * k, 2 * k + 1) for t in terms]
+                for k in range(max(1, -(-len(terms[0]) // 3), -(-len(terms[1]) // 3))):
+                    picked = [t[j] if j < len(t) else (ell, 0.0) for j in range(3 * k, 3 * k + 3) for t in terms]
                     rows.append([ell + mu, ell - mu if mu else spare] + [r for r, _ in picked] + [int(k > 0)])
                     coefs.append([c for _, c in picked])
             first[2 * ell + product + 1] = len(rows)
         first[2 * ell + 3:] = [len(rows)] * (2 * ell_max + 3 - (2 * ell + 3))
-    return (np.array(first, dtype=np.int64), np.array(rows, dtype=np.int64).reshape(-1, 7),
-            np.array(coefs, dtype=np.float64).reshape(-1, 4))
+    return (np.array(first, dtype=np.int64), np.array(rows, dtype=np.int64).reshape(-1, 9),
+            np.array(coefs, dtype=np.float64).reshape(-1, 6))
 
 
 _CHUNK = 256
 """Samples per block of :func:`_rotate` and of :func:`pnrotor.waveform.amplitudes._sum`."""
 
 
-# The kernels' innermost loops, one per function over the samples s of a block (row views of the
-# block arrays).  Written inline they measured no faster (LLVM left most of them scalar there).
+# The kernels' innermost loops, one per function over the samples s of a block, on the block arrays and row
+# indices.  Written inline they measured no faster (LLVM left most of them scalar there).
 
 @njit(cache=True, fastmath={"contract"})
-def _times_phase(x_re, x_im, e_re, e_im, conj, out_re, out_im, nb):
-    """out = e x (e* x if conj), complex numbers as (re, im) rows; out may be x."""
+def _times_phase(x_re, x_im, r, e_re, e_im, u, conj, out_re, out_im, ro, nb):
+    """Row ro of out = e x (e* x if conj) for rows r of x and u of e, complex numbers as (re, im) arrays; out may
+    be x."""
     sg = -1.0 if conj else 1.0
     for s in range(nb):
-        er, ei, xr, xi = e_re[s], sg * e_im[s], x_re[s], x_im[s]
-        out_re[s] = er * xr - ei * xi
-        out_im[s] = er * xi + ei * xr
+        er, ei, xr, xi = e_re[u, s], sg * e_im[u, s], x_re[r, s], x_im[r, s]
+        out_re[ro, s] = er * xr - ei * xi
+        out_im[ro, s] = er * xi + ei * xr
 
 
 @njit(cache=True, fastmath={"contract"})
-def _store(x_re, x_im, e_re, e_im, conj, scale, out, nb):
-    """out[2s], out[2s + 1] = the real and imaginary parts of scale e x (scale e* x if conj): complex numbers as
-    (re, im) rows into a float view of a complex row."""
+def _store(x_re, x_im, r, e_re, e_im, u, conj, scale, out, row, i0, nb):
+    """out[row, 2i], out[row, 2i + 1] (i = i0 + s) = the real and imaginary parts of scale e x (scale e* x if
+    conj) for rows r of x and u of e: complex numbers as (re, im) arrays into a float view of a complex array."""
     sg = -scale if conj else scale
+    o = out[row, 2 * i0:]   # indexed by the loop's own s (an index i0 + s keeps LLVM from vectorizing a loop)
     for s in range(nb):
-        er, ei, xr, xi = scale * e_re[s], sg * e_im[s], x_re[s], x_im[s]
-        out[2 * s] = er * xr - ei * xi
-        out[2 * s + 1] = er * xi + ei * xr
+        er, ei, xr, xi = scale * e_re[u, s], sg * e_im[u, s], x_re[r, s], x_im[r, s]
+        o[2 * s] = er * xr - ei * xi
+        o[2 * s + 1] = er * xi + ei * xr
 
 
 @njit(cache=True)
 def _phase_powers(e_re, e_im, nb):
     """Rows m = 2, 3, … of e^m from rows 0 (= 1) and 1 (= e)."""
     for m in range(2, e_re.shape[0]):
-        _times_phase(e_re[m - 1], e_im[m - 1], e_re[1], e_im[1], False, e_re[m], e_im[m], nb)
+        _times_phase(e_re, e_im, m - 1, e_re, e_im, 1, False, e_re, e_im, m, nb)
 
 
 @njit(cache=True, fastmath={"contract"})
-def _sum_difference(p_re, p_im, n_re, n_im, e_re, e_im, nb):
-    """(p, n) = (e p + e* n, e p − e* n)."""
+def _sum_difference(x_re, x_im, rp, rn, e_re, e_im, u, nb):
+    """(p, n) = (e p + e* n, e p − e* n) for the rows p = rp, n = rn of x and e = u of e."""
     for s in range(nb):
-        er, ei = e_re[s], e_im[s]
-        ur, ui = er * p_re[s] - ei * p_im[s], er * p_im[s] + ei * p_re[s]
-        vr, vi = er * n_re[s] + ei * n_im[s], er * n_im[s] - ei * n_re[s]
-        p_re[s], p_im[s], n_re[s], n_im[s] = ur + vr, ui + vi, ur - vr, ui - vi
+        er, ei = e_re[u, s], e_im[u, s]
+        ur, ui = er * x_re[rp, s] - ei * x_im[rp, s], er * x_im[rp, s] + ei * x_re[rp, s]
+        vr, vi = er * x_re[rn, s] + ei * x_im[rn, s], er * x_im[rn, s] - ei * x_re[rn, s]
+        x_re[rp, s], x_im[rp, s], x_re[rn, s], x_im[rn, s] = ur + vr, ui + vi, ur - vr, ui - vi
 
 
 @njit(cache=True, fastmath={"contract"})
-def _pass(y, yn, x, j, c, add, nb):
-    """(y, yn) = (A + B, A − B), added to them if ``add``, for A = c0 x_j0 + c2 x_j2, B = c1 x_j1 + c3 x_j3 (rows
-    j = rows[k, 2:6] of :func:`rotation_plan`, c its coefs[k]); real rows (the real and imaginary parts a call
-    each: LLVM vectorizes these, not the complex pass)."""
-    j0, j1, j2, j3, c0, c1, c2, c3 = j[2], j[3], j[4], j[5], c[0], c[1], c[2], c[3]
-    if add:
+def _pass(y, x, rows, coefs, k, nb):
+    """Pass k of :func:`rotation_plan` on real rows, x to y: (y_r, y_rn) = (A + B, A − B), added to them if it
+    says so, for A = c0 x_j0 + c2 x_j2 + c4 x_j4, B = c1 x_j1 + c3 x_j3 + c5 x_j5 (r, rn, j = rows[k, :8],
+    c = coefs[k]; the real and imaginary parts a call each: LLVM vectorizes these, not the complex pass)."""
+    r, rn, j0, j1, j2, j3, j4, j5 = rows[k, 0], rows[k, 1], rows[k, 2], rows[k, 3], rows[k, 4], rows[k, 5], \
+        rows[k, 6], rows[k, 7]
+    c0, c1, c2, c3, c4, c5 = coefs[k, 0], coefs[k, 1], coefs[k, 2], coefs[k, 3], coefs[k, 4], coefs[k, 5]
+    if rows[k, 8] == 1:
         for s in range(nb):
-            a, b = c0 * x[j0, s] + c2 * x[j2, s], c1 * x[j1, s] + c3 * x[j3, s]
-            y[s] += a + b
-            yn[s] += a - b
+            a = c0 * x[j0, s] + c2 * x[j2, s] + c4 * x[j4, s]
+            b = c1 * x[j1, s] + c3 * x[j3, s] + c5 * x[j5, s]
+            y[r, s] += a + b
+            y[rn, s] += a - b
     else:
         for s in range(nb):
-            a, b = c0 * x[j0, s] + c2 * x[j2, s], c1 * x[j1, s] + c3 * x[j3, s]
-            y[s], yn[s] = a + b, a - b
+            a = c0 * x[j0, s] + c2 * x[j2, s] + c4 * x[j4, s]
+            b = c1 * x[j1, s] + c3 * x[j3, s] + c5 * x[j5, s]
+            y[r, s], y[rn, s] = a + b, a - b
 
 
-@njit(cache=True, fastmath={"contract"})
-def _rotor_block(R, i0, nb, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im):
-    """Of the rotors R[i0 : i0 + nb], rows m of e^{imβ}, (−i e^{−iα})^m and (i e^{−iγ})^m (module docstring)."""
+@njit(cache=True)
+def _rotor_rows(R, i0, nb, q):
+    """Rows w, x, y, z of q (4, _CHUNK) = the rotors R[i0 : i0 + nb]: LLVM vectorizes a loop over rows, not over
+    R's strided columns (the loop of :func:`_rotor_block`: ~8 → ~3 ns per sample, measured)."""
     for s in range(nb):
-        w, x, y, z = R[i0 + s, 0], R[i0 + s, 1], R[i0 + s, 2], R[i0 + s, 3]
+        for k in range(4):
+            q[k, s] = R[i0 + s, k]
+
+
+@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+def _rotor_block(R, i0, nb, q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im):
+    """Of the rotors R[i0 : i0 + nb], rows m ≥ 1 of e^{imβ}, (−i e^{−iα})^m and (i e^{−iγ})^m (module docstring;
+    rows 0, = 1, are :func:`_rotation_scratch`'s); q (4, _CHUNK) scratch (:func:`_rotor_rows`)."""
+    _rotor_rows(R, i0, nb, q)
+    for s in range(nb):
+        w, x, y, z = q[0, s], q[1, s], q[2, s], q[3, s]
         a2, b2 = w * w + z * z, x * x + y * y
         a, b = np.sqrt(a2), np.sqrt(b2)
-        aw, az = (w / a, z / a) if a > _TINY else (1.0, 0.0)   # R̂_a = aw + i az
-        by, bx = (y / b, -x / b) if b > _TINY else (1.0, 0.0)  # R̂_b = by + i bx
-        eb_re[0, s], eb_im[0, s] = 1.0, 0.0
-        ea_re[0, s], ea_im[0, s] = 1.0, 0.0
-        eg_re[0, s], eg_im[0, s] = 1.0, 0.0
-        n2 = a2 + b2   # e^{iβ} = (|R_a| + i |R_b|)² / |R|²
-        eb_re[1, s], eb_im[1, s] = (a2 - b2) / n2, 2.0 * a * b / n2
-        ea_re[1, s], ea_im[1, s] = -(aw * bx + az * by), -(aw * by - az * bx)
-        eg_re[1, s], eg_im[1, s] = az * by - aw * bx, aw * by + az * bx
+        n = 1.0 / (a2 + b2)   # e^{iβ} = (|R_a| + i |R_b|)² / |R|²
+        eb_re[1, s], eb_im[1, s] = (a2 - b2) * n, 2.0 * a * b * n
+        if not a > _TINY:   # R_a = w + i z → 1 where it vanishes: any unit phase serves (module docstring)
+            w, z, a = 1.0, 0.0, 1.0
+        if not b > _TINY:   # R_b = y − i x → 1
+            y, x, b = 1.0, 0.0, 1.0
+        n = 1.0 / (a * b)   # −i e^{−iα} = −i conj(R_a R_b) / (|R_a| |R_b|), i e^{−iγ} = i conj(R_a) R_b / (|R_a| |R_b|)
+        ea_re[1, s], ea_im[1, s] = (w * x - z * y) * n, -(w * y + z * x) * n
+        eg_re[1, s], eg_im[1, s] = (w * x + z * y) * n, (w * y - z * x) * n
     _phase_powers(eb_re, eb_im, nb)
     _phase_powers(ea_re, ea_im, nb)
     _phase_powers(eg_re, eg_im, nb)
@@ -208,34 +229,32 @@ def _rotor_block(R, i0, nb, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im):
 def _passes(lo, hi, rows, coefs, x_re, x_im, y_re, y_im, nb):
     """The passes lo … hi−1 of :func:`rotation_plan` from x to y."""
     for k in range(lo, hi):
-        r, rn, add = rows[k, 0], rows[k, 1], rows[k, 6] == 1
-        _pass(y_re[r], y_re[rn], x_re, rows[k], coefs[k], add, nb)
-        _pass(y_im[r], y_im[rn], x_im, rows[k], coefs[k], add, nb)
+        _pass(y_re, x_re, rows, coefs, k, nb)
+        _pass(y_im, x_im, rows, coefs, k, nb)
 
 
 @njit(cache=True)
 def _rotate_ell(ell, columns, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb):
-    """Rows ℓ + m of (h_re, h_im) = Σ_μ Δ_{μm} e^{iμβ} Σ_m' Δ_{μm'} G_m' for G_m' = (i e^{−iγ})^m' H_ℓm' in rows
-    ℓ + m' of (G_re, G_im) (overwritten): h_ℓm before its factor (−i e^{−iα})^m (:func:`_store`), for a block whose
-    e^{iμβ} :func:`_rotor_block` gave; columns[m'] false for the |m'| where H_ℓm' vanishes, y scratch.  Each
-    product's input rows ℓ ± ν first become their sums and differences (the second's with its phases e^{±iνβ})."""
-    for nu in range(1, ell + 1):
-        if columns[nu]:
-            _sum_difference(G_re[ell + nu], G_im[ell + nu], G_re[ell - nu], G_im[ell - nu], eb_re[0], eb_im[0], nb)
+    """Rows ℓ + m of (h_re, h_im) = Σ_μ Δ_{μm} e^{iμβ} Σ_m' Δ_{μm'} G_m' for G_m' = (i e^{−iγ})^m' H_ℓm', given as
+    G_ℓ + G_−ℓ, …, G_0, …, G_ℓ − G_−ℓ in the rows of (G_re, G_im) (overwritten): h_ℓm before its factor
+    (−i e^{−iα})^m (:func:`_store`), for a block whose e^{iμβ} :func:`_rotor_block` gave; columns[ℓ, m'] false for
+    the |m'| where H_ℓm' vanishes, y scratch.  The second product's input rows ℓ ± ν become their sums and
+    differences with their phases e^{±iνβ}."""
     _passes(first[2 * ell], first[2 * ell + 1], rows, coefs, G_re, G_im, y_re, y_im, nb)
     for mu in range(1, ell + 1):
-        _sum_difference(y_re[ell + mu], y_im[ell + mu], y_re[ell - mu], y_im[ell - mu], eb_re[mu], eb_im[mu], nb)
+        _sum_difference(y_re, y_im, ell + mu, ell - mu, eb_re, eb_im, mu, nb)
     _passes(first[2 * ell + 1], first[2 * ell + 2], rows, coefs, y_re, y_im, h_re, h_im, nb)
 
 
 @njit(cache=True)
 def _rotation_scratch(ell_max, B):
-    """The block arrays of :func:`_rotor_block` and :func:`_rotate_ell`: eb_re, eb_im, ea_re, ea_im, eg_re, eg_im,
-    y_re, y_im, h_re, h_im (y and h with a spare row)."""
+    """The block arrays of :func:`_rotor_block` and :func:`_rotate_ell`: q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im
+    (their rows 0 set here to 1, once), y_re, y_im, h_re, h_im (y and h with a spare row)."""
     n_m, n_rows = ell_max + 1, 2 * ell_max + 2
-    return (np.empty((n_m, B)), np.empty((n_m, B)), np.empty((n_m, B)), np.empty((n_m, B)), np.empty((n_m, B)),
-            np.empty((n_m, B)), np.empty((n_rows, B)), np.empty((n_rows, B)), np.empty((n_rows, B)),
-            np.empty((n_rows, B)))
+    e_re, e_im = np.empty((3, n_m, B)), np.empty((3, n_m, B))
+    e_re[:, 0], e_im[:, 0] = 1.0, 0.0
+    return (np.empty((4, B)), e_re[0], e_im[0], e_re[1], e_im[1], e_re[2], e_im[2], np.empty((n_rows, B)),
+            np.empty((n_rows, B)), np.empty((n_rows, B)), np.empty((n_rows, B)))
 
 
 @njit(cache=True)
@@ -243,23 +262,23 @@ def _rotate(H, R, ell_max, columns, first, rows, coefs, h):
     """h[:, i] = 𝔇(R[i]) H[:, i] for (n_modes, N) arrays (h as a float view, (n_modes, 2N)), a block of _CHUNK
     samples at a time; every inner loop runs over the samples of the block (module docstring)."""
     B = _CHUNK
-    eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = _rotation_scratch(ell_max, B)
+    q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = _rotation_scratch(ell_max, B)
     G_re, G_im = np.empty((2 * ell_max + 1, B)), np.empty((2 * ell_max + 1, B))
     for i0 in range(0, R.shape[0], B):
         nb = min(B, R.shape[0] - i0)
-        _rotor_block(R, i0, nb, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
+        _rotor_block(R, i0, nb, q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
         for ell in range(2, ell_max + 1):
             first_row = mode_index(ell, -ell)
             for r in range(2 * ell + 1):
                 for s in range(nb):
                     G_re[r, s] = H[first_row + r, i0 + s].real
                     G_im[r, s] = H[first_row + r, i0 + s].imag
-                u = abs(r - ell)
-                _times_phase(G_re[r], G_im[r], eg_re[u], eg_im[u], r < ell, G_re[r], G_im[r], nb)
-            _rotate_ell(ell, columns[ell], first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb)
+                _times_phase(G_re, G_im, r, eg_re, eg_im, abs(r - ell), r < ell, G_re, G_im, r, nb)
+            for nu in range(1, ell + 1):
+                _sum_difference(G_re, G_im, ell + nu, ell - nu, eb_re, eb_im, 0, nb)
+            _rotate_ell(ell, columns, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb)
             for r in range(2 * ell + 1):
-                _store(h_re[r], h_im[r], ea_re[abs(r - ell)], ea_im[abs(r - ell)], r < ell, 1.0,
-                       h[first_row + r, 2 * i0:], nb)
+                _store(h_re, h_im, r, ea_re, ea_im, abs(r - ell), r < ell, 1.0, h, first_row + r, i0, nb)
 
 
 def wigner_D(R, ell_max):
