@@ -14,8 +14,8 @@ each integrated to one state:
 
 Rates, medians of interleaved rounds: pnrotor ``evolve_many`` with numba's threads (all cores) and with
 one thread; pnrotor single ``evolve(..., sampling='final')`` calls in a Python loop; LAL one call per
-binary in a Python loop (on a subset; LAL's per-binary cost does not depend on N).  The share of
-evolve_many spent in Python per binary (checks and parameter vectors) is the same stages timed alone.
+binary in a Python loop (on a subset; LAL's per-binary cost does not depend on N).  Per binary, evolve_many's
+time in Python (checks and parameter vectors) and in its compiled loops, from its ``stats`` (all threads).
 
     python benchmarks/bench_many.py [--n 2000] [--rounds 5] [--lal-n 200]
 """
@@ -30,8 +30,6 @@ import numba
 import numpy as np
 
 from pnrotor.pn import evolve, evolve_many, lalsuite_orders
-from pnrotor.pn.evolve import build_system
-from pnrotor.pn.settings import settings
 
 ORDERS = lalsuite_orders("T4")
 T4 = ls.GetApproximantFromString("SpinTaylorT4")
@@ -70,16 +68,6 @@ def singles(m1, m2, c1, c2, f_end):
         evolve(m1[i], m2[i], c1[i], c2[i], 20.0, f_max=f_end, sampling="final", **ORDERS)
 
 
-def python_stages(m1, m2, c1, c2, f_end):
-    """What evolve_many does in Python per binary: settings and the parameter vector."""
-    for i in range(m1.size):
-        build_system(settings(m1[i], m2[i], c1[i], c2[i], 20.0, f_min=None, f_max=f_end, approximant="T4",
-                              spin_orbit_order=ORDERS["spin_orbit_order"], spin_spin_order=3.0, pn_order=3.5,
-                              ell_hat=(0, 0, 1), n_hat=(1, 0, 0), kappa1=1.0, kappa2=1.0, atol=1e-12, rtol=0.0,
-                              sampling="final", rotor="coprecessing", precession_phase_shift=True,
-                              integrate_rotor=False, precession="averaged", max_steps=2_000_000))
-
-
 def timed(f):
     t = time.perf_counter()
     f()
@@ -99,11 +87,15 @@ def main():
     print(f"{args.n} binaries (30 + 10 Msun-like, precessing) from 20 Hz; LAL and single evolve calls on "
           f"{args.lal_n}; numba threads {threads}; medians of {args.rounds} interleaved rounds\n")
     print(f"{'to':>8} {'many x' + str(threads):>12} {'many x1':>10} {'evolve loop':>12} {'LAL':>10} "
-          f"{'many/LAL':>9} {'Python us/binary':>17} {'steps':>6}")
+          f"{'many/LAL':>9} {'us/binary: Python':>18} {'loops':>6} {'steps':>6}")
     for label, f_end, lal_end in (("end", None, 0.0), ("100 Hz", 100.0, 100.0)):
-        rates = {k: [] for k in ("many", "many1", "single", "lal", "python")}
+        rates = {k: [] for k in ("many", "many1", "single", "lal", "python", "loops")}
         for _ in range(args.rounds):
-            rates["many"].append(args.n / timed(lambda: evolve_many(*pop, 20.0, f_end=f_end, **ORDERS)))
+            t = time.perf_counter()
+            stats = evolve_many(*pop, 20.0, f_end=f_end, **ORDERS).stats
+            rates["many"].append(args.n / (time.perf_counter() - t))
+            rates["python"].append((stats["wall_time_s"] - stats["wall_time_integrate_s"]) / args.n * 1e6)
+            rates["loops"].append(stats["wall_time_integrate_s"] / args.n * 1e6)
             numba.set_num_threads(1)
             try:
                 rates["many1"].append(args.n / timed(lambda: evolve_many(*pop, 20.0, f_end=f_end, **ORDERS)))
@@ -111,11 +103,11 @@ def main():
                 numba.set_num_threads(threads)
             rates["single"].append(args.lal_n / timed(lambda: singles(*sub, f_end)))
             rates["lal"].append(args.lal_n / timed(lambda: lal_final(*sub, lal_end)))
-            rates["python"].append(timed(lambda: python_stages(*sub, f_end)) / args.lal_n * 1e6)
         med = {k: statistics.median(v) for k, v in rates.items()}
         steps = np.mean(evolve_many(*sub, 20.0, f_end=f_end, **ORDERS).nsteps)
         print(f"{label:>8} {med['many']:>10.0f}/s {med['many1']:>8.0f}/s {med['single']:>10.0f}/s "
-              f"{med['lal']:>8.0f}/s {med['many'] / med['lal']:>8.1f}x {med['python']:>17.1f} {steps:>6.1f}")
+              f"{med['lal']:>8.0f}/s {med['many'] / med['lal']:>8.1f}x {med['python']:>18.1f} {med['loops']:>6.1f} "
+              f"{steps:>6.1f}")
 
     freqs = np.array([10.0, 12.0, 15.0, 17.0, 25.0, 35.0, 50.0, 70.0, 100.0, 200.0])
     print(f"\n{freqs.size} frequencies {freqs.min():g}-{freqs.max():g} Hz per binary: binaries/s")
