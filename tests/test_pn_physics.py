@@ -323,6 +323,27 @@ def test_instantaneous_precession_is_the_averaged_one_plus_nutation():
     assert np.max(np.abs(np.linalg.norm(b.chi1, axis=1) - np.linalg.norm(args[2]))) < 1e-10
 
 
+@pytest.mark.parametrize("block", ["small", "near pi/2 multiples", "large", "beyond the reduction"])
+def test_half_angle_cos_sin_is_within_an_ulp_of_the_exact_values(block):
+    """The sampling kernel's cos(Φ/2), sin(Φ/2) (fdlibm's reduction and polynomials, vectorized) against mpmath
+    at 120 bits, block by block as the kernel takes them: within 1.2e-16 (an ulp of values in [0.5, 1); libm is
+    within 5.6e-17, ours 1.10e-16 seen).  The last block holds a Φ beyond the reduction's range (libm's path)."""
+    import mpmath
+
+    from pnrotor.pn.sampling import _BLOCK, _REDUCTION_LIMIT, _half_angle_cos_sin
+    rng = np.random.default_rng(7)
+    ph = {"small": np.concatenate(([0.0, -0.0, 5e-324, 1e-300], rng.uniform(-1e-3, 1e-3, 28),
+                                   rng.uniform(-10.0, 10.0, 32))),
+          "near pi/2 multiples": np.arange(-32, 32) * math.pi + rng.choice([-1, 0, 1], 64) * 1e-12,
+          "large": rng.uniform(-2.0, 2.0, _BLOCK) * 0.999 * _REDUCTION_LIMIT,
+          "beyond the reduction": np.concatenate(([2.0 * _REDUCTION_LIMIT], rng.uniform(-1e4, 1e4, 63)))}[block]
+    cs = np.empty((2, _BLOCK))
+    _half_angle_cos_sin(ph, cs, ph.size)
+    mpmath.mp.prec = 120
+    exact = np.array([[float(f(mpmath.mpf(float(x)) / 2)) for x in ph] for f in (mpmath.cos, mpmath.sin)])
+    assert np.max(np.abs(cs[:, :ph.size] - exact)) <= 1.2e-16
+
+
 def test_output_kernel_matches_the_integrators_dense_output():
     """The sampling kernel's dense evaluation equals pnrotor.ode's DenseOutput at the same times."""
     from pnrotor.ode import dop853
