@@ -485,10 +485,10 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     """Everything :func:`make_parameters` builds that does not depend on the spins or v_end, for n binaries
     that share the options and differ in X1, κ₁, κ₂ (arrays (n,), or floats for one binary): (heads
     (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
-    :func:`vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~5 µs per
+    :func:`vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
     binary, against ~50 µs of Python floats for one, measured).  The numbers are built with the binaries
-    last (p[j] = x is then a row) and turned binaries-first at the end (only the head of p: a transpose of all
-    of it cost 2 µs per binary).  Binary i gets bitwise the numbers of a
+    last (p[j] = x is then a row) and turned binaries-first at the end (only the head of p: with all of it
+    transposed they took ~10 µs per binary).  Binary i gets bitwise the numbers of a
     call with its floats: the coefficient functions are elementwise and use only +, −, ×, / (powers are
     written as products, since numpy's x ** k is not libm's pow on every CPU)."""
     from .energy import energy_series
