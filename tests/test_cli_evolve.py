@@ -570,6 +570,16 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     core.touch()
     cli_evolve._warn_if_cold()
     assert capsys.readouterr().err == "" and started == [True]
+    # a population run compiles evolve_many's loop (which holds the core): said while that is missing, with
+    # nothing compiled aside
+    cli_evolve._warn_if_cold(here=False, population=True)
+    assert capsys.readouterr().err.startswith("pnrotor: compiling its numba kernels") and started == [True]
+    loop = Path(numba_cache.cache_folder("pn")) / "many._integrate_all-101.py311.nbi"
+    assert loop.parent.parent == in_tmp / "empty-cache"
+    loop.parent.mkdir(parents=True)
+    loop.touch()
+    cli_evolve._warn_if_cold(here=False, population=True)
+    assert capsys.readouterr().err == ""
 
 
 def test_the_core_compiled_aside_is_what_the_cache_then_holds(tmp_path, monkeypatch):
@@ -617,24 +627,32 @@ def test_sigterm_and_sighup_stop_a_command_like_ctrl_c(signame, in_tmp):
 
 def test_the_cache_folder_is_the_one_numba_uses(tmp_path, monkeypatch):
     """numba_cache.cache_folder (found without importing numba, for the cold-start message) against numba's own
-    cache locators for the DOP853 core: with NUMBA_CACHE_DIR, in the source tree, and user-wide where the
-    package folder is read-only (a system install)."""
+    cache locators for the DOP853 core and evolve_many's loop: with NUMBA_CACHE_DIR, in the source tree, and
+    user-wide where the package folder is read-only (a system install)."""
     import os
 
     from numba.core import caching, config
 
     from pnrotor import numba_cache
     from pnrotor.ode.dop853 import _dop853_core
-    func, file = _dop853_core.py_func, _dop853_core.py_func.__code__.co_filename
+    from pnrotor.pn.many import _integrate_all
+    kernels = {"ode": _dop853_core, "pn": _integrate_all}
+
+    def locators(cls):
+        return {package: cls(f.py_func, f.py_func.__code__.co_filename).get_cache_path()
+                for package, f in kernels.items()}
+
+    def ours():
+        return {package: numba_cache.cache_folder(package) for package in kernels}
 
     monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
-    assert numba_cache.cache_folder() == caching.InTreeCacheLocator(func, file).get_cache_path()
+    assert ours() == locators(caching.InTreeCacheLocator)
 
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
     monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path / "numba"))
-    assert numba_cache.cache_folder() == caching.UserProvidedCacheLocator(func, file).get_cache_path()
+    assert ours() == locators(caching.UserProvidedCacheLocator)
 
     monkeypatch.delenv("NUMBA_CACHE_DIR")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "home-cache"))
     monkeypatch.setattr(os, "access", lambda path, mode: False)      # the package folder read-only
-    assert numba_cache.cache_folder() == caching.UserWideCacheLocator(func, file).get_cache_path()
+    assert ours() == locators(caching.UserWideCacheLocator)

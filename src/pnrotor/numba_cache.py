@@ -24,22 +24,24 @@ _aside = None
 """The process compiling the DOP853 core, while it may still be running."""
 
 
-def is_cold():
-    """True if numba's cache has no compiled DOP853 core for this installation yet."""
-    return not glob.glob(os.path.join(cache_folder(), "dop853._dop853_core-*.nbi"))
+def is_cold(kernel="dop853._dop853_core", package="ode"):
+    """True if numba's cache has no compiled ``kernel`` (``module.function`` of the subpackage ``pnrotor.package``)
+    for this installation yet; by default the DOP853 core, which every run needs (``evolve_many`` compiles
+    its own loop around it, ``many._integrate_all`` of ``pn``)."""
+    return not glob.glob(os.path.join(cache_folder(package), f"{kernel}-*.nbi"))
 
 
-def cache_folder():
-    """Where numba caches the kernels of ``pnrotor/ode`` (numba 0.5x–0.6x's locators, in their order):
-    NUMBA_CACHE_DIR/ode_<sha1 of the folder> if set; else the folder's ``__pycache__`` if it can be written;
-    else the user-wide ``$XDG_CACHE_HOME/numba/ode_<sha1>`` (~/.cache by default), where a read-only install
-    (a system site-packages) gets its cache."""
-    ode = os.path.dirname(os.path.abspath(find_spec("pnrotor.ode").origin))
-    sub = "ode_" + hashlib.sha1(ode.encode()).hexdigest()
+def cache_folder(package="ode"):
+    """Where numba caches the kernels of the subpackage ``pnrotor.package`` (numba 0.5x–0.6x's locators, in their
+    order): NUMBA_CACHE_DIR/<package>_<sha1 of its folder> if set; else the folder's ``__pycache__`` if it can
+    be written; else the user-wide ``$XDG_CACHE_HOME/numba/<package>_<sha1>`` (~/.cache by default), where a
+    read-only install (a system site-packages) gets its cache."""
+    folder = os.path.dirname(os.path.abspath(find_spec(f"pnrotor.{package}").origin))
+    sub = f"{package}_" + hashlib.sha1(folder.encode()).hexdigest()
     if os.environ.get("NUMBA_CACHE_DIR"):
         return os.path.join(os.environ["NUMBA_CACHE_DIR"], sub)
-    tree = os.path.join(ode, "__pycache__")
-    if os.access(tree if os.path.isdir(tree) else ode, os.W_OK):
+    tree = os.path.join(folder, "__pycache__")
+    if os.access(tree if os.path.isdir(tree) else folder, os.W_OK):
         return tree
     return os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "numba", sub)
 

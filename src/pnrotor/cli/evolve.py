@@ -119,16 +119,19 @@ def add_parser(subparsers):
     parser.set_defaults(func=run)
 
 
-def _warn_if_cold(here=True):
+def _warn_if_cold(here=True, population=False):
     """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent wait; if
-    this process runs the evolutions (``here``), the biggest kernel is compiled in a second process meanwhile
-    (`pnrotor.numba_cache.compile_core_aside`; worker processes compile their own)."""
+    this process runs the evolutions (``here``), the biggest kernel, the DOP853 core, is compiled in a second
+    process meanwhile (`pnrotor.numba_cache.compile_core_aside`; worker processes compile their own).  A
+    ``population`` run also compiles `evolve_many`'s loop around the core (which loads the core compiled aside):
+    the line is said when either is missing."""
     from pnrotor import numba_cache
 
-    if numba_cache.is_cold():
-        print("pnrotor: compiling its numba kernels for this machine, once (~10-15 s); later runs load them in "
-              "~1 s", file=sys.stderr, flush=True)
-        if here:
+    core = numba_cache.is_cold()
+    if core or population and numba_cache.is_cold("many._integrate_all", "pn"):
+        print(f"pnrotor: compiling its numba kernels for this machine, once ({'~20-25' if population else '~10-15'} "
+              "s); later runs load them in ~1 s", file=sys.stderr, flush=True)
+        if here and core:
             numba_cache.compile_core_aside()
 
 
@@ -326,7 +329,7 @@ def _run_population(args, start):
         print(f"pnrotor evolve --batch {args.batch} --population: {len(plan.rows)} binaries"
               + (f" ({bad} with bad values)" if bad else "")
               + f", final states by evolve_many in {groups} call{'s' * (groups != 1)}")
-    _warn_if_cold(here=False)
+    _warn_if_cold(population=True)
     outcome = plan.run()
     for row in outcome.failed:
         print(f"  FAILED {row!r}: {row.error}")

@@ -40,6 +40,7 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from .. import numba_cache
 from ..ode import AFTER_STEP_SIG, by_address
 from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
                           STATUS_EVENT, _crossed, _dop853_core, _locate_root, no_after_step)
@@ -221,6 +222,8 @@ def _integrate_groups(groups, atol, rtol, max_steps, out, counts):
                 np.array(rows, dtype=np.int64), near_vk, near_r, out.t, out.v, out.Phi, out.chi1, out.chi2, out.R,
                 out.ell_hat, counts, np.empty(0), OUT_FINAL)
         start = time.perf_counter()
+        if not _integrate_all.overloads:   # it is compiled with the DOP853 core inside: load the core that the
+            numba_cache.wait_for_core_aside()   # CLI may be compiling in another process, not compile it twice
         with numba.parallel_chunksize(1):
             _integrate_all(*args)
         seconds += time.perf_counter() - start
