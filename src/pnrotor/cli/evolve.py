@@ -299,14 +299,7 @@ def _run_batch(args):
     outcome = plan.run(progress=not args.quiet and sys.stderr.isatty())
     if not args.quiet:
         print("\n".join(_batch_line(plan.rows[i], outcome.briefs[i]) for i in sorted(outcome.briefs)))
-    for row in outcome.failed:
-        print(f"  FAILED {row!r}: {row.error}")
-    wall = time.perf_counter() - start
-    count = outcome.written
-    written = f"wrote {count} run{'s' * (count != 1)} to {path}" if count else "wrote no file"
-    print(f"{written}; {len(outcome.failed)} failed; {wall:.3g} s in all ({outcome.evolve_seconds:.3g} s evolving, "
-          f"{count / wall:.3g} runs/s)")
-    return 1 if outcome.failed else 0
+    return _totals(outcome, path, start, "run", "runs")
 
 
 def _run_population(args, start):
@@ -331,13 +324,19 @@ def _run_population(args, start):
               + f", final states by evolve_many in {groups} call{'s' * (groups != 1)}")
     _warn_if_cold(population=True)
     outcome = plan.run()
+    return _totals(outcome, path, start, "final state", "rows")
+
+
+def _totals(outcome, path, start, item, per):
+    """Print a batch's failures and its last line (``item``: what the file holds per row, ``per``: the rate's
+    unit) → the exit status, 1 if a row failed."""
     for row in outcome.failed:
         print(f"  FAILED {row!r}: {row.error}")
     wall = time.perf_counter() - start
     count = outcome.written
-    written = f"wrote {count} final state{'s' * (count != 1)} to {path}" if count else "wrote no file"
+    written = f"wrote {count} {item}{'s' * (count != 1)} to {path}" if count else "wrote no file"
     print(f"{written}; {len(outcome.failed)} failed; {wall:.3g} s in all ({outcome.evolve_seconds:.3g} s evolving, "
-          f"{count / wall:.3g} rows/s)")
+          f"{count / wall:.3g} {per}/s)")
     return 1 if outcome.failed else 0
 
 
