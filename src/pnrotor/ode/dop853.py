@@ -553,13 +553,15 @@ def _dop853_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_st
         cap = 1
     t_out = np.empty(cap)
     y_out = np.empty((cap, n))
-    n_out = 0
+    # the counters passed to _append_row/_append_segment start as np.int64(0), not 0: a literal 0 makes
+    # numba's type inference compile those helpers twice (for Literal[int](0), then int64)
+    n_out = np.int64(0)
     k_ev = 0  # next t_eval index
     dcap = 64 if want_dense else 1
     seg_t = np.empty(dcap)
     seg_h = np.empty(dcap)
     seg_c = np.empty((dcap, 8, n))
-    nseg = 0
+    nseg = np.int64(0)
 
     nfev = 0
     nsteps = 0
@@ -734,7 +736,7 @@ def _dop853_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_st
                 k_ev += 1
 
     if out_mode == OUT_FINAL:
-        t_out, y_out, n_out = _append_row(t_out, y_out, 0, t, y)
+        t_out, y_out, n_out = _append_row(t_out, y_out, np.int64(0), t, y)
 
     ivals[IV_STATUS] = status
     ivals[IV_NFEV] = nfev

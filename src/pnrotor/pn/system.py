@@ -430,9 +430,10 @@ def _vdot_series(E_raw, F_raw, kmax, approx):
 @njit(cache=True)
 def _store_series(N, D, Ep, basis, fold, p, v0):
     """Store N, D, Ê′ (folded for the aligned RHS) in p; return N, D, Ê′ and event 6 at v0."""
-    fold_and_store(N, basis, fold, p, P_NUM)
-    fold_and_store(D, basis, fold, p, P_DEN)
-    fold_and_store(Ep, basis, fold, p, P_EP)
+    # offsets as np.int64: a plain constant would compile fold_and_store once per offset (Literal[int])
+    fold_and_store(N, basis, fold, p, np.int64(P_NUM))
+    fold_and_store(D, basis, fold, p, np.int64(P_DEN))
+    fold_and_store(Ep, basis, fold, p, np.int64(P_EP))
     Nv, Dv = v_derivative(N), v_derivative(D)
     n0, d0 = eval_at(N, v0, basis), eval_at(D, v0, basis)
     peak0 = 9.0 * n0 * d0 + eval_at(Nv, v0, basis) * d0 - n0 * eval_at(Dv, v0, basis)
