@@ -193,3 +193,20 @@ def test_interrupted_population_leaves_no_file(in_tmp, capsys, monkeypatch):
     monkeypatch.setattr(population.Plan, "_evolve", staticmethod(interrupted))
     code, _, err = evolve(capsys, "--batch", "t.csv", "--population", "-o", "p.h5")
     assert code == 130 and "interrupted" in err and os.listdir(in_tmp) == ["t.csv"]
+
+
+def test_rows_evolve_refuses_fail_with_its_message(in_tmp, capsys):
+    """A row's f_max must lie above f_ref and its f_min below, both finite, as `pnrotor.evolve` checks them
+    (evolve_many itself takes a target on either side of f_ref, and NaN as the end of the inspiral): such rows
+    fail alone, each with the message evolve gives for it; the others are written."""
+    targets = {"below": ",50", "above": "150,", "equal": "100,", "nan": ",nan", "inf": "inf,"}
+    (in_tmp / "r.csv").write_text("name,m1,m2,chi1,chi2,f_ref,f_min,f_max\n" + "".join(
+        f'{name},30,10,"0,0,0","0,0,0",100,{f}\n' for name, f in targets.items()) + 'ok,30,10,"0,0,0","0,0,0",100,,150\n')
+    code, out, err = evolve(capsys, "--batch", "r.csv", "--population", "-o", "r.h5")
+    assert code == 1 and err == ""
+    for name, f in targets.items():
+        f_min, f_max = (None if x == "" else float(x) for x in f.split(","))
+        with pytest.raises(ValueError) as refused:
+            pnrotor.evolve(30, 10, (0, 0, 0), (0, 0, 0), 100, f_min=f_min, f_max=f_max, sampling="final")
+        assert f"({name}): {refused.value}" in out, name
+    assert list(hdf5.read(in_tmp / "r.h5").name) == ["ok"]

@@ -6,7 +6,9 @@ This module owns that mode and :class:`PopulationTable`, the dataclass of its fi
 
 * the rows are those of :mod:`~pnrotor.batch.table`, checked first (a bad value marks its row only); an
   empty sampling cell means ``final`` here, and a row this mode cannot compute is marked too
-  (:func:`unsupported`): a sampling other than final, or f_min and f_max together;
+  (:func:`unsupported`): a sampling other than final, f_min and f_max together, or masses and frequencies that
+  `pnrotor.evolve` refuses (its own check and message: e.g. an f_max not above f_ref, or a NaN cell, which
+  `evolve_many` would take as the end of the inspiral);
 * the rows that share the options `evolve_many` takes as shared (:data:`SHARED`) are computed by one call of
   it, each row to its own target: f_max forward, else f_min backward, else the end of the inspiral.  A row
   evolve_many marks ``'invalid'`` fails with its message; a group whose shared options it refuses (e.g. a
@@ -84,6 +86,17 @@ def unsupported(params):
     if params["f_min"] is not None and params["f_max"] is not None:
         return ("f_min and f_max are both given: the population mode gives one state per row, at f_max (forward), "
                 "at f_min (backward) or at the end of the inspiral; give at most one of them")
+    # evolve's checks of the masses and frequencies: evolve_many takes its target on either side of f_ref (and NaN
+    # as the end of the inspiral), while a row's f_max must lie above f_ref and its f_min below, both finite
+    from pnrotor.pn import initial as _ini
+    from pnrotor.pn import settings
+
+    try:
+        settings.frequencies(_ini.solar_masses(params["m1"], "m1"), _ini.solar_masses(params["m2"], "m2"),
+                             _ini.hertz(params["f_ref"], "f_ref"), _ini.hertz(params["f_min"], "f_min", allow_none=True),
+                             _ini.hertz(params["f_max"], "f_max", allow_none=True))
+    except ValueError as error:
+        return str(error)
     return None
 
 

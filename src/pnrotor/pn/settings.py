@@ -176,7 +176,7 @@ def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, 
     ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
     kappa1 = _kappa(kappa1, "kappa1")
     kappa2 = _kappa(kappa2, "kappa2")
-    M_sec, X1, v0, v_min, v_max = _frequencies(m1, m2, f_ref, f_min, f_max)
+    M_sec, X1, v0, v_min, v_max = frequencies(m1, m2, f_ref, f_min, f_max)
     spin_content, c1, c2 = _spin_content(c1, c2, ell)
     return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, ell, n, kappa1, kappa2, *o, M_sec, X1, X1 * (1.0 - X1), v0,
                     v_min, v_max, _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
@@ -202,9 +202,10 @@ def _kappa(kappa, name):
     return value
 
 
-def _frequencies(m1, m2, f_ref, f_min, f_max):
+def frequencies(m1, m2, f_ref, f_min, f_max):
     """(G M/c³ in s, X₁, v at f_ref, at f_min (or None), at f_max (or 1)), checking the mass ratio, the order of
-    the frequencies, V_MIN ≤ v < 1 at f_min and f_ref and v ≤ 1 at f_max."""
+    the frequencies, V_MIN ≤ v < 1 at f_min and f_ref and v ≤ 1 at f_max (masses in M☉ and frequencies in Hz,
+    already checked finite and positive; also the population mode's check of its rows)."""
     if not max(m1, m2) <= MAX_MASS_RATIO * min(m1, m2):
         raise ValueError(f"m1/m2 = {m1 / m2:.4g}: the mass ratio must be at most {MAX_MASS_RATIO:g} either way")
     M_sec = _ini.total_mass_seconds(m1, m2)
