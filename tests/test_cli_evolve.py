@@ -571,8 +571,8 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     cli_evolve._warn_if_cold()
     assert capsys.readouterr().err == "" and started == [True]
     # a population run compiles evolve_many's loop (which holds the core): said while that is missing, with
-    # nothing compiled aside
-    cli_evolve._warn_if_cold(here=False, population=True)
+    # nothing compiled aside (the core is cached)
+    cli_evolve._warn_if_cold(population=True)
     assert capsys.readouterr().err.startswith("pnrotor: compiling its numba kernels") and started == [True]
     loop = Path(numba_cache.cache_folder("pn")) / "many._integrate_all-101.py311.nbi"
     assert loop.parent.parent == in_tmp / "empty-cache"

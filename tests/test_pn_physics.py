@@ -339,8 +339,8 @@ def test_half_angle_cos_sin_is_within_an_ulp_of_the_exact_values(block):
           "beyond the reduction": np.concatenate(([2.0 * _REDUCTION_LIMIT], rng.uniform(-1e4, 1e4, 63)))}[block]
     cs = np.empty((2, _BLOCK))
     _half_angle_cos_sin(ph, cs, ph.size)
-    mpmath.mp.prec = 120
-    exact = np.array([[float(f(mpmath.mpf(float(x)) / 2)) for x in ph] for f in (mpmath.cos, mpmath.sin)])
+    with mpmath.workprec(120):
+        exact = np.array([[float(f(mpmath.mpf(float(x)) / 2)) for x in ph] for f in (mpmath.cos, mpmath.sin)])
     assert np.max(np.abs(cs[:, :ph.size] - exact)) <= 1.2e-16
 
 

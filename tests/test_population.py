@@ -187,10 +187,12 @@ def test_existing_output_is_refused_unless_overwrite(in_tmp, capsys, monkeypatch
 
 
 def test_interrupted_population_leaves_no_file(in_tmp, capsys, monkeypatch):
-    def interrupted(*args):
+    """Ctrl-C while the table is being written (its temporary file exists): exit 130, neither file left."""
+    def interrupted(g, *args):
+        assert any(name.endswith(".pnrotor-tmp") for name in os.listdir(in_tmp))
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(population.Plan, "_evolve", staticmethod(interrupted))
+    monkeypatch.setattr(hdf5, "_put_run", interrupted)
     code, _, err = evolve(capsys, "--batch", "t.csv", "--population", "-o", "p.h5")
     assert code == 130 and "interrupted" in err and os.listdir(in_tmp) == ["t.csv"]
 
