@@ -80,12 +80,11 @@ def table(nu, delta, ell_max, order2, spins):
 
 @lru_cache(maxsize=64)
 def _real_terms(nu, delta, ell_max, order2, spins, constants):
-    """:func:`table`'s terms as the kernel adds them: (ell_start, target, k, q, c, columns, plan), real terms
+    """:func:`table`'s terms as the kernel adds them: (ell_start, target, k, q, c, plan), real terms
     sorted by ℓ (those of ℓ are ell_start[ℓ] : ell_start[ℓ+1]), target the row of the block array (ℓ ± m for
     the real part, 2 ell_max + 1 more for the imaginary part); the spin quantities q ≥ 2 folded into c if
-    ``constants`` gives their values (terms with equal target, k and q summed); columns[ℓ, m] whether H_ℓ,±m
-    has any term and plan the passes of the rotation that skip the others
-    (:func:`pnrotor.waveform.wigner.rotation_plan`).
+    ``constants`` gives their values (terms with equal target, k and q summed); plan the passes of the rotation,
+    which skip the columns m' where H_ℓ,±m' has no term (:func:`pnrotor.waveform.wigner.rotation_plan`).
     Cached: a run's modes computed again (another ℓ_max, frame or distance) skip these ~0.1–0.3 ms."""
     n_pow = 2 * ell_max + 1
     labels = ell_m(ell_max)
@@ -105,7 +104,7 @@ def _real_terms(nu, delta, ell_max, order2, spins, constants):
     columns = np.zeros((ell_max + 1, ell_max + 1), dtype=np.bool_)
     columns[ell, np.abs(target % n_pow - ell)] = True
     return (np.searchsorted(ell, np.arange(ell_max + 2)), target, k, q, np.array([summed[key] for key in keys]),
-            columns, rotation_plan(columns))
+            rotation_plan(columns))
 
 
 @njit(cache=True, fastmath={"contract"})
@@ -204,7 +203,7 @@ def _mirror(X, rp, rn, n, e_re, e_im, m, sig, fold, nb):
 
 @njit(cache=True)
 def _sum(v, chi1, chi2, R, spins, frame, h0, scale, logs, X1, X2, kappa1, kappa2, ell_max, ell_start, target, k, q,
-         c, columns, first, rows, coefs, out):
+         c, first, rows, coefs, out):
     """out, a float view (n_modes, 2N) of complex (n_modes, N), = the modes of every sample in frame ``frame``
     (:data:`_FRAME_CODES`), a block of samples at a time, times ``scale`` as they are stored (module docstring; the
     other arguments are :func:`_sample_block`'s, :func:`_real_terms`' and
@@ -239,7 +238,7 @@ def _sum(v, chi1, chi2, R, spins, frame, h0, scale, logs, X1, X2, kappa1, kappa2
                             X, nb)
             o_re, o_im = H_re, H_im
             if frame == 2:
-                _rotate_ell(ell, columns, first, rows, coefs, eb_re, eb_im, H_re, H_im, y_re, y_im, h_re, h_im, nb)
+                _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, H_re, H_im, y_re, y_im, h_re, h_im, nb)
                 o_re, o_im = h_re, h_im
             first_row = mode_index(ell, -ell)
             for r in range(2 * ell + 1):
@@ -267,13 +266,13 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
         _spin_block(np.concatenate((chi1, chi2)).astype(np.float64).reshape(6, 1), 1, X1, X2, float(kappa1),
                     float(kappa2), True, Q)
         constants = tuple(Q[:, 0].tolist())
-    ell_start, target, k, q, c, columns, plan = _real_terms(nu, delta, int(ell_max), int(order2), chi1 is not None,
+    ell_start, target, k, q, c, plan = _real_terms(nu, delta, int(ell_max), int(order2), chi1 is not None,
                                                               constants)
     chi1, chi2 = (empty, empty) if not spins else (np.ascontiguousarray(x, dtype=np.float64) for x in (chi1, chi2))
     R = np.zeros((0, 4)) if R is None else np.ascontiguousarray(R, dtype=np.float64)
     out = np.empty((n_modes(ell_max), v.size), dtype=np.complex128)
     _sum(v, chi1, chi2, R, spins, _FRAME_CODES[frame], H0 * nu, float(scale), bool(np.any(q == _Q_LOG)), X1, X2,
-         float(kappa1), float(kappa2), int(ell_max), ell_start, target, k, q, c, columns, *plan,
+         float(kappa1), float(kappa2), int(ell_max), ell_start, target, k, q, c, *plan,
          out.view(np.float64))
     return out
 

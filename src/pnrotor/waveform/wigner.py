@@ -234,11 +234,11 @@ def _passes(lo, hi, rows, coefs, x_re, x_im, y_re, y_im, nb):
 
 
 @njit(cache=True)
-def _rotate_ell(ell, columns, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb):
+def _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb):
     """Rows ℓ + m of (h_re, h_im) = Σ_μ Δ_{μm} e^{iμβ} Σ_m' Δ_{μm'} G_m' for G_m' = (i e^{−iγ})^m' H_ℓm', given as
     G_ℓ + G_−ℓ, …, G_0, …, G_ℓ − G_−ℓ in the rows of (G_re, G_im) (overwritten): h_ℓm before its factor
-    (−i e^{−iα})^m (:func:`_store`), for a block whose e^{iμβ} :func:`_rotor_block` gave; columns[ℓ, m'] false for
-    the |m'| where H_ℓm' vanishes, y scratch.  The second product's input rows ℓ ± ν become their sums and
+    (−i e^{−iα})^m (:func:`_store`), for a block whose e^{iμβ} :func:`_rotor_block` gave, by the passes of
+    :func:`rotation_plan` (first, rows, coefs: the columns m' where H_ℓ,±m' vanish are skipped), y scratch.  The second product's input rows ℓ ± ν become their sums and
     differences with their phases e^{±iνβ}."""
     _passes(first[2 * ell], first[2 * ell + 1], rows, coefs, G_re, G_im, y_re, y_im, nb)
     for mu in range(1, ell + 1):
@@ -258,7 +258,7 @@ def _rotation_scratch(ell_max, B):
 
 
 @njit(cache=True)
-def _rotate(H, R, ell_max, columns, first, rows, coefs, h):
+def _rotate(H, R, ell_max, first, rows, coefs, h):
     """h[:, i] = 𝔇(R[i]) H[:, i] for (n_modes, N) arrays (h as a float view, (n_modes, 2N)), a block of _CHUNK
     samples at a time; every inner loop runs over the samples of the block (module docstring)."""
     B = _CHUNK
@@ -276,7 +276,7 @@ def _rotate(H, R, ell_max, columns, first, rows, coefs, h):
                 _times_phase(G_re, G_im, r, eg_re, eg_im, abs(r - ell), r < ell, G_re, G_im, r, nb)
             for nu in range(1, ell + 1):
                 _sum_difference(G_re, G_im, ell + nu, ell - nu, eb_re, eb_im, 0, nb)
-            _rotate_ell(ell, columns, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb)
+            _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb)
             for r in range(2 * ell + 1):
                 _store(h_re, h_im, r, ea_re, ea_im, abs(r - ell), r < ell, 1.0, h, first_row + r, i0, nb)
 
@@ -306,6 +306,6 @@ def rotate_modes(H, R, ell_max):
                          f"R (N, 4); got H {H.shape}, R {R.shape}")
     H = np.ascontiguousarray(H, dtype=np.complex128)
     h = np.empty_like(H)
-    columns = np.ones((ell_max + 1, ell_max + 1), dtype=np.bool_)
-    _rotate(H, R, int(ell_max), columns, *rotation_plan(columns), h.view(np.float64))
+    every_column = np.ones((ell_max + 1, ell_max + 1), dtype=np.bool_)
+    _rotate(H, R, int(ell_max), *rotation_plan(every_column), h.view(np.float64))
     return h
