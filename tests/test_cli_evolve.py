@@ -551,6 +551,17 @@ def test_full_disk_is_one_line_and_leaves_no_file(in_tmp, capsys, monkeypatch):
     assert os.listdir(in_tmp) == []
 
 
+def test_modes_defaults_are_those_of_pnrotor_modes():
+    """The CLI keeps copies of modes()' defaults (parsing does not import numba): they must be modes()' own."""
+    import inspect
+
+    from pnrotor.cli import evolve as cli_evolve
+    from pnrotor.waveform.modes import modes
+    defaults = inspect.signature(modes).parameters
+    assert (cli_evolve.ELL_MAX, cli_evolve.AMPLITUDE_ORDER) == (defaults["ell_max"].default,
+                                                                defaults["amplitude_order"].default)
+
+
 def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     """With no compiled DOP853 core in numba's cache (an empty NUMBA_CACHE_DIR), one line on stderr says
     that the kernels are being compiled, once, and the core's compilation starts in another process; with

@@ -42,7 +42,8 @@ from pnrotor.cli import UsageError
 DEFAULT_FOLDER = "waveforms"
 PRECESSION = ("averaged", "averaged_varpi", "instantaneous")
 ELL_MAX, AMPLITUDE_ORDER = 8, 3.5
-"""--ell-max and --amplitude-order when not given (`pnrotor.modes`' defaults)."""
+"""--ell-max and --amplitude-order when not given: copies of `pnrotor.modes`' defaults, so that parsing the command
+line does not import numba (tests/test_cli_evolve.py checks that they agree)."""
 NOT_WITH_POPULATION = ("jobs", "scheduler", "resume", "modes", "ell_max", "amplitude_order", "distance")
 """Options of the other batch modes, refused with --population."""
 
@@ -112,7 +113,7 @@ def add_parser(subparsers):
                        help="run the batch on this Dask scheduler (e.g. tcp://host:8786); needs pnrotor[dask]")
     batch.add_argument("--population", action="store_true",
                        help="final states only, for population synthesis: every row computed together by "
-                       "pnrotor.evolve_many (numba's threads; 25-38x the rows/s of a group per run) and written as "
+                       "pnrotor.evolve_many (numba's threads; 26-42x the rows/s of the per-row batch) and written as "
                        "one table, a column per quantity (docs/hdf5-schema.md); each row's state at f_max, at "
                        "f_min (integrated backward) or at the end of the inspiral; sampling must be final (an "
                        "empty cell means final); not with --jobs, --scheduler, --resume or --modes")
