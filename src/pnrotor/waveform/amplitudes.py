@@ -267,7 +267,7 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
                     float(kappa2), True, Q)
         constants = tuple(Q[:, 0].tolist())
     ell_start, target, k, q, c, plan = _real_terms(nu, delta, int(ell_max), int(order2), chi1 is not None,
-                                                              constants)
+                                                   constants)
     chi1, chi2 = (empty, empty) if not spins else (np.ascontiguousarray(x, dtype=np.float64) for x in (chi1, chi2))
     R = np.zeros((0, 4)) if R is None else np.ascontiguousarray(R, dtype=np.float64)
     out = np.empty((n_modes(ell_max), v.size), dtype=np.complex128)

@@ -238,8 +238,8 @@ def _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h
     """Rows ℓ + m of (h_re, h_im) = Σ_μ Δ_{μm} e^{iμβ} Σ_m' Δ_{μm'} G_m' for G_m' = (i e^{−iγ})^m' H_ℓm', given as
     G_ℓ + G_−ℓ, …, G_0, …, G_ℓ − G_−ℓ in the rows of (G_re, G_im) (overwritten): h_ℓm before its factor
     (−i e^{−iα})^m (:func:`_store`), for a block whose e^{iμβ} :func:`_rotor_block` gave, by the passes of
-    :func:`rotation_plan` (first, rows, coefs: the columns m' where H_ℓ,±m' vanish are skipped), y scratch.  The second product's input rows ℓ ± ν become their sums and
-    differences with their phases e^{±iνβ}."""
+    :func:`rotation_plan` (first, rows, coefs: the columns m' where H_ℓ,±m' vanish are skipped), y scratch.  The
+    second product's input rows ℓ ± ν become their sums and differences with their phases e^{±iνβ}."""
     _passes(first[2 * ell], first[2 * ell + 1], rows, coefs, G_re, G_im, y_re, y_im, nb)
     for mu in range(1, ell + 1):
         _sum_difference(y_re, y_im, ell + mu, ell - mu, eb_re, eb_im, mu, nb)
