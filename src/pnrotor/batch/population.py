@@ -88,13 +88,11 @@ def unsupported(params):
                 "at f_min (backward) or at the end of the inspiral; give at most one of them")
     # evolve's checks of the masses and frequencies: evolve_many takes its target on either side of f_ref (and NaN
     # as the end of the inspiral), while a row's f_max must lie above f_ref and its f_min below, both finite
-    from pnrotor.pn import initial as _ini
     from pnrotor.pn import settings
 
     try:
-        settings.frequencies(_ini.solar_masses(params["m1"], "m1"), _ini.solar_masses(params["m2"], "m2"),
-                             _ini.hertz(params["f_ref"], "f_ref"), _ini.hertz(params["f_min"], "f_min", allow_none=True),
-                             _ini.hertz(params["f_max"], "f_max", allow_none=True))
+        given = settings.masses_and_frequencies(*(params[key] for key in ("m1", "m2", "f_ref", "f_min", "f_max")))
+        settings.frequencies(*given)
     except ValueError as error:
         return str(error)
     return None

@@ -166,11 +166,7 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
 def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2):
     """:class:`Settings` of one binary run with :class:`Options` ``o`` (the rest of :func:`settings`'s checks,
     those of the binary; ``evolve_many`` checks the options once and calls this per binary)."""
-    m1 = _ini.solar_masses(m1, "m1")
-    m2 = _ini.solar_masses(m2, "m2")
-    f_ref = _ini.hertz(f_ref, "f_ref")
-    f_min = _ini.hertz(f_min, "f_min", allow_none=True)
-    f_max = _ini.hertz(f_max, "f_max", allow_none=True)
+    m1, m2, f_ref, f_min, f_max = masses_and_frequencies(m1, m2, f_ref, f_min, f_max)
     c1 = _ini.spin_vector(chi1, "chi1")
     c2 = _ini.spin_vector(chi2, "chi2")
     ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
@@ -202,10 +198,17 @@ def _kappa(kappa, name):
     return value
 
 
+def masses_and_frequencies(m1, m2, f_ref, f_min, f_max):
+    """m1, m2 in M☉ and f_ref, f_min, f_max (None allowed) in Hz as ``evolve`` takes them (floats or astropy
+    Quantities), each checked finite and positive (a ValueError naming it)."""
+    return (_ini.solar_masses(m1, "m1"), _ini.solar_masses(m2, "m2"), _ini.hertz(f_ref, "f_ref"),
+            _ini.hertz(f_min, "f_min", allow_none=True), _ini.hertz(f_max, "f_max", allow_none=True))
+
+
 def frequencies(m1, m2, f_ref, f_min, f_max):
     """(G M/c³ in s, X₁, v at f_ref, at f_min (or None), at f_max (or 1)), checking the mass ratio, the order of
-    the frequencies, V_MIN ≤ v < 1 at f_min and f_ref and v ≤ 1 at f_max (masses in M☉ and frequencies in Hz,
-    already checked finite and positive; also the population mode's check of its rows)."""
+    the frequencies, V_MIN ≤ v < 1 at f_min and f_ref and v ≤ 1 at f_max (of :func:`masses_and_frequencies`' values; also the
+    population mode's check of its rows)."""
     if not max(m1, m2) <= MAX_MASS_RATIO * min(m1, m2):
         raise ValueError(f"m1/m2 = {m1 / m2:.4g}: the mass ratio must be at most {MAX_MASS_RATIO:g} either way")
     M_sec = _ini.total_mass_seconds(m1, m2)
