@@ -14,6 +14,11 @@ Timings include the Python calls and freeing each call's own output; medians ove
 (LAL, ours, ours-default and the evolution alone alternate case by case), robust on a shared machine.  The
 last two columns are modes()' own cost per sample, (evolve + modes − evolve) / samples, in ns.
 
+The last line measures what the machine charges for fresh memory, for the largest default output of the table:
+filling a new array of its size right after freeing one (memory the kernel has at hand), and after 3 s idle
+(a virtual machine with Linux free page reporting has by then handed the freed memory back to its host, and
+touching it again faults on the host).  Large outputs pay this inside the timed calls, LAL's as well as ours.
+
     python benchmarks/bench_modes.py [--rounds 7] [--cases NAME ...]
 """
 
@@ -22,6 +27,8 @@ import os
 import statistics
 import sys
 import time
+
+import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
 from pn_cases import CASES  # noqa: E402
@@ -41,6 +48,7 @@ def main():
 
     from pnrotor import evolve, modes
     from pnrotor.pn import lalsuite_orders
+    from pnrotor.waveform.layout import n_modes
 
     orders = lalsuite_orders("T4")
     params = lal.CreateDict()
@@ -87,6 +95,25 @@ def main():
               + ("" if abs(r["samples"] - r["lal_samples"]) <= 1 else f"  (LAL {r['lal_samples']} samples)"))
     print(f"LAL / pnrotor, l <= 4 at 1.5PN: min {min(worst):.2f}, median {statistics.median(worst):.2f}; "
           f"pnrotor's default (l <= 8, 3.5PN): min {min(worst_full):.2f}, median {statistics.median(worst_full):.2f}")
+    shape = (n_modes(8), max(r["samples"] for r in runs.values()))
+    at_hand, idle = fresh_memory(shape)
+    print(f"fresh memory, {np.prod(shape) * 16 / 1e6:.0f} MB (the largest default output) filled: "
+          f"{at_hand:.0f} ms right after freeing as much, {idle:.0f} ms after 3 s idle (medians of 3)")
+
+
+def fresh_memory(shape, repeat=3):
+    """Milliseconds to allocate and fill a complex array of ``shape`` right after freeing one of that size,
+    and after 3 s idle (medians)."""
+    times = {True: [], False: []}
+    for _ in range(repeat):
+        for idle in (False, True):
+            np.ones(shape, dtype=complex)
+            if idle:
+                time.sleep(3.0)
+            t = time.perf_counter()
+            np.ones(shape, dtype=complex)
+            times[idle].append(1e3 * (time.perf_counter() - t))
+    return statistics.median(times[False]), statistics.median(times[True])
 
 
 if __name__ == "__main__":
