@@ -143,6 +143,30 @@ def test_modes_object():
         h.in_frame("lab")
 
 
+@pytest.mark.parametrize("ell, m", [(2.0, 2), (2, 1.5), (3, -0.5), ("2", 2), (None, 2), (2, True),
+                                    (2, np.array([1, 2])), (4, 0), (1, 0), (3, 4)])
+def test_mode_takes_integers_in_range(ell, m):
+    h = modes(pnrotor.evolve(30.0, 10.0, (0, 0, 0), (0, 0, 0), 100.0, sampling="final"), ell_max=3)
+    np.testing.assert_array_equal(h.mode(np.int64(3), -2), h.data[mode_index(3, -2)])
+    with pytest.raises(ValueError, match="need integers 2 <= ell <= 3"):
+        h.mode(ell, m)
+
+
+def test_polarization_angles_are_radians_or_astropy_angles():
+    u = pytest.importorskip("astropy.units")
+    h = modes(pnrotor.evolve(**PRECESSING, sampling="steps"), ell_max=3)
+    expected = h.polarizations(np.radians(30.0), np.radians(10.0), psi=np.radians(20.0))
+    given = h.polarizations(30.0 * u.deg, 10.0 * u.deg, psi=20.0 * u.deg)
+    for a, b in zip(given, expected):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-15 * np.max(np.abs(b)))
+    assert np.all(h.polarizations(np.float64(0.3))[0] == h.polarizations(0.3)[0])
+    for name in ("inclination", "phi_ref", "psi"):
+        for bad in (np.nan, np.inf, None, True, "0.3", np.array([0.1, 0.2]), 3.0 * u.s, 0.5 * u.one):
+            kw = {"inclination": 0.3, name: bad}
+            with pytest.raises(ValueError, match=f"{name} must be"):
+                h.polarizations(**kw)
+
+
 def test_modes_round_trip_through_hdf5_beside_their_run(tmp_path):
     """hdf5.write/read of Modes (kind "Modes"), alone and as a group next to the run in a batch file:
     bitwise; the complex data readable with plain h5py."""

@@ -58,13 +58,20 @@ def test_polarizations_equal_lal_sum_over_modes():
         assert np.max(np.abs(hc - hc_ref.data.data)) < 1e-13 * scale
 
 
-def test_polarization_angle_rotates_spin_two():
+def test_polarization_angle_is_lals():
+    """A detector's strain from the polarizations at ψ through LAL's antenna patterns at 0 is the strain from
+    those at 0 through LAL's patterns at ψ (``XLALComputeDetAMResponse``)."""
     ell_m = [(2, m) for m in range(-2, 3)]
     data = rng.normal(size=(5, 8)) + 1j * rng.normal(size=(5, 8))
     hp, hc = polarizations(data, ell_m, 0.9, 0.3)
-    for psi in (0.2, np.pi / 4, 2.0):
+    response = lal.CachedDetectors[lal.LHO_4K_DETECTOR].response
+    ra, dec, gmst = 1.1, -0.4, 0.3
+    f0 = lal.ComputeDetAMResponse(response, ra, dec, 0.0, gmst)
+    for psi in (0.2, np.pi / 4, 2.0, -0.7):
         hp_psi, hc_psi = polarizations(data, ell_m, 0.9, 0.3, psi=psi)
-        np.testing.assert_allclose(hp_psi + 1j * hc_psi, np.exp(-2j * psi) * (hp + 1j * hc), atol=1e-13)
+        f = lal.ComputeDetAMResponse(response, ra, dec, psi, gmst)
+        strain = f[0] * hp + f[1] * hc
+        np.testing.assert_allclose(f0[0] * hp_psi + f0[1] * hc_psi, strain, atol=1e-13 * np.max(np.abs(strain)))
     hp_pi, hc_pi = polarizations(data, ell_m, 0.9, 0.3, psi=np.pi)  # ψ → ψ + π changes nothing
     np.testing.assert_allclose(hp_pi, hp, atol=1e-13)
     np.testing.assert_allclose(hc_pi, hc, atol=1e-13)

@@ -25,6 +25,8 @@ Checked: against LALSuite's SpinTaylorT4 modes (ℓ ≤ 4, 1.5PN; tests/test_wav
 quadrupole formula (tests/test_waveform_modes.py).
 """
 
+import math
+import sys
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -47,6 +49,24 @@ def _megaparsecs(distance):
     from pnrotor.pn.initial import _positive
 
     return _positive(distance, "Mpc", "distance", "distance in Mpc")
+
+
+def _angle(value, name):
+    """Radians from a finite real number (radians) or an astropy angle; ValueError naming ``name``."""
+    u = sys.modules.get("astropy.units")   # a Quantity exists only if its module was imported
+    if u is not None and isinstance(value, u.Quantity):
+        if value.unit.physical_type != "angle":
+            raise ValueError(f"{name} must be an angle (radians, or an astropy angle); got {value!r}")
+        value = value.to_value(u.rad)
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite angle in radians (a number, or an astropy angle); got {value!r}")
+    return float(value)
+
+
+def _integer(value):
+    """Whether ``value`` is an integer (Python's or numpy's), not a bool."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
 def _scale(from_Mpc, to_Mpc, M_seconds):
@@ -93,9 +113,9 @@ class Modes:
 
     def mode(self, ell, m):
         """h_ℓm, (N,) complex."""
-        if not (2 <= ell <= self.ell_max and abs(m) <= ell):
-            raise ValueError(f"mode (ell, m) = ({ell}, {m}) not in these modes: need 2 <= ell <= {self.ell_max}, "
-                             f"|m| <= ell")
+        if not (_integer(ell) and _integer(m) and 2 <= ell <= self.ell_max and abs(m) <= ell):
+            raise ValueError(f"mode (ell, m) = ({ell}, {m}) not in these modes: need integers "
+                             f"2 <= ell <= {self.ell_max}, |m| <= ell")
         return self.data[mode_index(ell, m)]
 
     def _frame_rotor(self, frame):
@@ -134,9 +154,12 @@ class Modes:
     def polarizations(self, inclination, phi_ref=0.0, distance=None, psi=0.0):
         """h₊, h× (N,) seen from the direction (θ, φ) = (ι, π/2 − φ_ref) of the inertial frame — the direction
         LALSuite gives a line of sight with inclination ι and reference phase φ_ref when it builds
-        polarizations from modes (``azimuthal = LAL_PI_2 - phiRef`` in LALSimInspiral.c) — polarization
-        angle ψ: strain at ``distance`` (Mpc or an astropy length; default the modes' own), or r h / M when
-        neither gives a distance."""
+        polarizations from modes (``azimuthal = LAL_PI_2 - phiRef`` in LALSimInspiral.c) — with LALSuite's
+        polarization angle ψ (:mod:`pnrotor.waveform.polarizations`), as strain at ``distance`` (Mpc or an
+        astropy length; default the modes' own), or r h / M when neither gives a distance.  The angles are
+        finite numbers in radians or astropy angles."""
+        inclination, phi_ref, psi = (_angle(x, name) for x, name in ((inclination, "inclination"),
+                                                                      (phi_ref, "phi_ref"), (psi, "psi")))
         to_Mpc = self.distance_Mpc if distance is None else _megaparsecs(distance)
         scale = 1.0 if to_Mpc is None else _scale(self.distance_Mpc, to_Mpc, self.inputs["M_seconds"])
         data = self.in_frame("inertial").data

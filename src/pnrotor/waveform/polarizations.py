@@ -14,7 +14,9 @@ The polarizations seen from the direction (θ, φ) = (ι, φ) of the modes' fram
     h₊ − i h× = Σ_ℓm h_ℓm ₋₂Y_ℓm(ι, φ)
 
 (the relation of ``XLALSimInspiralPolarizationsFromSphHarmTimeSeries``), and a polarization angle ψ
-rotates them as h₊ + i h× → e^{−2iψ}(h₊ + i h×) (h₊ → h₊ cos 2ψ + h× sin 2ψ, h× → h× cos 2ψ − h₊ sin 2ψ).
+rotates them as h₊ + i h× → e^{2iψ}(h₊ + i h×) (h₊ → h₊ cos 2ψ − h× sin 2ψ, h× → h× cos 2ψ + h₊ sin 2ψ): ψ is
+LALSuite's, F₊(0) h₊(ψ) + F×(0) h×(ψ) = F₊(ψ) h₊ + F×(ψ) h× for the antenna patterns F of
+``XLALComputeDetAMResponse`` at polarization angle ψ (tests/test_waveform_polarizations.py).
 """
 
 import math
@@ -47,5 +49,5 @@ def polarizations(data, ell_m, inclination, phi, psi=0.0):
     hp, hc = h.real, -h.imag
     if psi:
         c, s = math.cos(2.0 * psi), math.sin(2.0 * psi)
-        hp, hc = hp * c + hc * s, hc * c - hp * s
+        hp, hc = hp * c - hc * s, hc * c + hp * s
     return hp, hc
