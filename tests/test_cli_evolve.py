@@ -516,6 +516,9 @@ def test_modes_written_beside_the_run(in_tmp, capsys):
     (["--modes", "--ell-max", "9"], "ell_max must be an integer from 2 to 8"),
     (["--modes", "--amplitude-order", "1.25"], "amplitude_order must be one of"),
     (["--modes", "--distance", "-3"], "distance must be a finite positive"),
+    (["--ell-max", "4"], "--ell-max applies to --modes runs only"),
+    (["--amplitude-order", "7"], "--amplitude-order applies to --modes runs only"),
+    (["--distance", "-3"], "--distance applies to --modes runs only"),
 ])
 def test_bad_modes_options_exit_2_before_running(extra, message, in_tmp, capsys, monkeypatch):
     monkeypatch.setattr(backends, "evolve_row", lambda params: pytest.fail("ran"))

@@ -140,6 +140,9 @@ def run(args):
     for option in ("resume", "population"):
         if getattr(args, option) and args.batch is None:
             raise UsageError(f"--{option} applies to --batch runs only")
+    for option in ("ell_max", "amplitude_order", "distance"):
+        if getattr(args, option) is not None and not (args.modes or args.population):   # --population refuses them
+            raise UsageError(f"--{option.replace('_', '-')} applies to --modes runs only")
     if args.batch is not None:
         return _run_batch(args)
     for option in ("jobs", "scheduler"):
@@ -305,7 +308,7 @@ def _run_batch(args):
 
 def _run_population(args, start):
     given = [f"--{option.replace('_', '-')}" for option in NOT_WITH_POPULATION
-             if getattr(args, option) not in (None, False)]
+             if getattr(args, option) is not None and getattr(args, option) is not False]
     if given:
         raise UsageError(f"{', '.join(given)} cannot be combined with --population (one process computes the final "
                          "states, on numba's threads; no histories, so no modes)")
