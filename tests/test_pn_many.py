@@ -106,6 +106,12 @@ def test_results_do_not_depend_on_the_number_of_threads():
     (lambda: evolve_many([], [], np.zeros((0, 3)), np.zeros((0, 3)), 20.0), "m1, m2 and f_ref"),
     (lambda: evolve_many([30, 20], [10, 10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1, m2 and f_ref"),
     (lambda: evolve_many([30, 20], [10, 10], np.zeros((3, 3)), [0, 0, 0], 20.0), "chi1 must have shape"),
+    (lambda: evolve_many([True, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
+    (lambda: evolve_many(np.array([1, 0], bool), [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
+    (lambda: evolve_many([30, 20], [10, 10], [0, 0, np.True_], [0, 0, 0], 20.0), "chi1 must be numbers"),
+    (lambda: evolve_many(["abc", 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
+    (lambda: evolve_many([30, 20], [10, 10], [[0, 0, 0], [0, 0]], [0, 0, 0], 20.0), "chi1 must be numbers"),
+    (lambda: evolve_many([[30], [20, 1]], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "got shapes ragged"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, atol=-1.0), "atol"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, approximant="T3"), "approximant"),
 ])
@@ -182,11 +188,27 @@ def test_refused_targets_leave_the_others():
     assert list(pop.termination[1]) == ["invalid"] * 5 and all("m1" in m for m in pop.message[1])
 
 
+def test_targets_and_binaries_evolve_refuses_are_refused_alone():
+    """A target that is not a finite positive frequency, in a per-binary table, and a negative f_ref, are
+    'invalid' entries with evolve's messages; the other binaries and targets go on."""
+    table = [[30.0, 15.0], [np.nan, 30.0], [-5.0, 0.0], [30.0, 15.0]]
+    pop = evolve_many([30.0] * 4, [10.0] * 4, [0, 0, 0.5], [0, 0, 0], [20.0, 20.0, 20.0, -20.0], frequencies=table)
+    assert [list(x) for x in pop.termination] == [["f_max", "f_min"], ["invalid", "f_max"], ["invalid"] * 2,
+                                                  ["invalid"] * 2]
+    for i, k in ((1, 0), (2, 0), (2, 1)):
+        with pytest.raises(ValueError) as refusal:
+            evolve(30.0, 10.0, [0, 0, 0.5], [0, 0, 0], 20.0, f_max=table[i][k])
+        assert pop.message[i, k] == str(refusal.value).replace("f_max", f"frequencies[{k}]")
+    with pytest.raises(ValueError) as refusal:
+        evolve(30.0, 10.0, [0, 0, 0.5], [0, 0, 0], -20.0, f_max=30.0)
+    assert list(pop.message[3]) == [str(refusal.value)] * 2
+    np.testing.assert_array_equal(pop.v[1, 1], pop.v[0, 0])
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"frequencies": [30.0], "f_end": 30.0}, "not both"),
     ({"frequencies": np.ones((3, 2)) * 30}, r"frequencies must have shape \(K,\) or \(N, K\)"),
     ({"frequencies": []}, "K >= 1"),
-    ({"frequencies": [30.0, np.nan]}, "finite and > 0"),
 ])
 def test_bad_frequency_lists_raise(kwargs, match):
     with pytest.raises(ValueError, match=match):

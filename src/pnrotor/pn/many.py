@@ -173,13 +173,37 @@ def _nearer_targets(events, p_run, v_target, direction, seg_t, seg_h, seg_c, iv,
 
 
 def _per_binary(x, n, name, shape=()):
-    """x broadcast to (n,) + shape as float64, or a ValueError naming the parameter."""
+    """x broadcast to (n,) + shape as float64, or a ValueError naming the parameter (booleans refused, as
+    ``evolve`` refuses them)."""
+    want = "(N,) or a scalar" if not shape else f"(N, {shape[0]}) or ({shape[0]},)"
     try:
-        return np.ascontiguousarray(np.broadcast_to(np.asarray(x, dtype=np.float64), (n,) + shape))
+        if _has_bool(x):
+            raise TypeError
+        a = np.asarray(x, dtype=np.float64)
     except (TypeError, ValueError):
-        want = "(N,) or a scalar" if not shape else f"(N, {shape[0]}) or ({shape[0]},)"
-        raise ValueError(f"{name} must have shape {want} with N = {n} binaries, "
-                         f"got {np.shape(x)}") from None
+        raise ValueError(f"{name} must be numbers (not booleans or text) of shape {want} with N = {n} "
+                         f"binaries") from None
+    try:
+        return np.ascontiguousarray(np.broadcast_to(a, (n,) + shape))
+    except ValueError:
+        raise ValueError(f"{name} must have shape {want} with N = {n} binaries, got {a.shape}") from None
+
+
+def _has_bool(x):
+    """Whether x is a boolean, an array of them, or a list or tuple holding one at any depth."""
+    if isinstance(x, np.ndarray):
+        return x.dtype.kind == "b"
+    if isinstance(x, (list, tuple)):
+        return any(_has_bool(item) for item in x)
+    return isinstance(x, _ini._BOOLS)
+
+
+def _shape(x):
+    """np.shape(x), or "ragged" for nested sequences of unequal lengths."""
+    try:
+        return np.shape(x)
+    except ValueError:
+        return "ragged"
 
 
 def _target_table(f_end, frequencies, n):
@@ -194,8 +218,6 @@ def _target_table(f_end, frequencies, n):
     if f.ndim != 2 or f.shape[0] != n or f.shape[1] == 0:
         raise ValueError(f"frequencies must have shape (K,) or (N, K) with K >= 1 and N = {n} binaries, "
                          f"got {np.shape(frequencies)}")
-    if not np.all(np.isfinite(f) & (f > 0.0)):
-        raise ValueError("frequencies must be finite and > 0 (Hz)")
     return np.ascontiguousarray(f), True
 
 
@@ -249,12 +271,13 @@ def _refused_targets(f, m1, m2, f_ref):
     accepts, by the same check (:func:`~pnrotor.pn.settings.target_v`: v beyond v at f_ref, and within the PN
     range); the binary's other targets go on."""
     refused = {}
-    if not (m1 > 0.0 and m2 > 0.0 and math.isfinite(m1 + m2)):
+    if not (m1 > 0.0 and m2 > 0.0 and math.isfinite(m1 + m2) and 0.0 < f_ref < math.inf):
         return refused    # the binary itself is invalid (settings says why)
     M_sec = _ini.total_mass_seconds(m1, m2)
     v0 = _ini.v_from_frequency(f_ref, M_sec)
     for k, x in enumerate(f):
         try:
+            _ini.hertz(x, f"frequencies[{k}]")
             target_v(x, f"frequencies[{k}]", x >= f_ref, f_ref, v0, M_sec)
         except ValueError as e:
             refused[k] = str(e)
@@ -278,10 +301,11 @@ def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_
         The GW frequency to integrate to: above f_ref forward (``evolve``'s f_max), below f_ref backward
         (its f_min); None (or NaN for a binary) integrates forward to the end of the inspiral.
     frequencies : None or array_like (K,) or (N, K)
-        Instead of f_end: K GW frequencies (Hz, finite, > 0; shared or per binary), in any order and on either
-        side of f_ref; the state at each, as ``evolve`` with f_max (or f_min) there would end.  The outputs
-        gain a K axis.  A frequency ``evolve`` would refuse (f_ref, or one that gives its v, or one outside the
-        PN range) gives an ``'invalid'`` entry; the binary's other targets go on.
+        Instead of f_end: K GW frequencies (Hz; shared or per binary), in any order and on either side of
+        f_ref; the state at each, as ``evolve`` with f_max (or f_min) there would end.  The outputs gain a K
+        axis.  A frequency ``evolve`` would refuse (not finite and positive, f_ref, one that gives its v, or one
+        outside the PN range) gives an ``'invalid'`` entry with evolve's message; the binary's other targets go
+        on.
     ell_hat, n_hat : array_like (N, 3) or (3,)
         ℓ̂ and n̂ at f_ref.
     kappa1, kappa2 : array_like (N,) or scalar
@@ -300,7 +324,7 @@ integrate_rotor, precession, max_steps
         shape = ()
     if len(shape) != 1 or shape[0] == 0:
         raise ValueError(f"m1, m2 and f_ref must be 1-D arrays of the same length N >= 1 (one per binary) or "
-                         f"scalars, got shapes {np.shape(m1)}, {np.shape(m2)}, {np.shape(f_ref)}")
+                         f"scalars, got shapes {_shape(m1)}, {_shape(m2)}, {_shape(f_ref)}")
     n = shape[0]
     m1a, m2a, fref = (_per_binary(x, n, name) for x, name in ((m1, "m1"), (m2, "m2"), (f_ref, "f_ref")))
     targets, listed = _target_table(f_end, frequencies, n)
