@@ -83,6 +83,14 @@ def test_inspect_large_input_array_is_summarized(tmp_path, capsys):
     assert "  t_eval  (1001,) float64, from 0.0 to 10.0" in out.splitlines()
 
 
+def test_inspect_large_text_array_lists_its_values(tmp_path, capsys):
+    """A population's per-row options are text arrays: their distinct values, not a min and max of strings."""
+    names = np.array(["T4", "T1", "T4"] * 4, dtype=object)
+    hdf5.write(tmp_path / "run.h5", frame_history(inputs={"approximant": names}))
+    out = inspect_output(capsys, tmp_path / "run.h5")
+    assert "  approximant  (12,) object, 2 distinct: 'T1', 'T4'" in out.splitlines()
+
+
 def test_inspect_batch_file(files, capsys):
     out = inspect_output(capsys, files["batch"])
     lines = out.splitlines()

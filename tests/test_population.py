@@ -153,6 +153,8 @@ def test_a_pnrotor_without_the_kind_refuses_the_file_clearly(tmp_path, monkeypat
 
 @pytest.mark.parametrize("args, message", [
     (["--jobs", "2"], "--jobs cannot be combined with --population"),
+    (["--jobs", "0"], "--jobs cannot be combined with --population"),
+    (["--modes", "--ell-max", "0", "--distance", "0"], "--modes, --ell-max, --distance cannot be combined"),
     (["--scheduler", "tcp://localhost:1"], "--scheduler cannot be combined with --population"),
     (["--resume"], "--resume cannot be combined with --population"),
     (["--modes", "--ell-max", "3"], "--modes, --ell-max cannot be combined with --population"),
@@ -200,15 +202,19 @@ def test_interrupted_population_leaves_no_file(in_tmp, capsys, monkeypatch):
 def test_rows_evolve_refuses_fail_with_its_message(in_tmp, capsys):
     """A row's f_max must lie above f_ref and its f_min below, both finite, as `pnrotor.evolve` checks them
     (evolve_many itself takes a target on either side of f_ref, and NaN as the end of the inspiral): such rows
-    fail alone, each with the message evolve gives for it; the others are written."""
-    targets = {"below": ",50", "above": "150,", "equal": "100,", "nan": ",nan", "inf": "inf,"}
+    fail alone, each with the message evolve gives for it (for a row with two faults, the one evolve names
+    first); the others are written."""
+    targets = {"below": ",50", "above": "150,", "equal": "100,", "nan": ",nan", "inf": "inf,", "spin": ",50"}
+    chi1 = {"spin": (1.2, 0.0, 0.0)}
     (in_tmp / "r.csv").write_text("name,m1,m2,chi1,chi2,f_ref,f_min,f_max\n" + "".join(
-        f'{name},30,10,"0,0,0","0,0,0",100,{f}\n' for name, f in targets.items()) + 'ok,30,10,"0,0,0","0,0,0",100,,150\n')
+        f'{name},30,10,"{",".join(map(str, chi1.get(name, (0, 0, 0))))}","0,0,0",100,{f}\n'
+        for name, f in targets.items()) + 'ok,30,10,"0,0,0","0,0,0",100,,150\n')
     code, out, err = evolve(capsys, "--batch", "r.csv", "--population", "-o", "r.h5")
     assert code == 1 and err == ""
     for name, f in targets.items():
         f_min, f_max = (None if x == "" else float(x) for x in f.split(","))
         with pytest.raises(ValueError) as refused:
-            pnrotor.evolve(30, 10, (0, 0, 0), (0, 0, 0), 100, f_min=f_min, f_max=f_max, sampling="final")
+            pnrotor.evolve(30, 10, chi1.get(name, (0, 0, 0)), (0, 0, 0), 100, f_min=f_min, f_max=f_max,
+                           sampling="final")
         assert f"({name}): {refused.value}" in out, name
     assert list(hdf5.read(in_tmp / "r.h5").name) == ["ok"]

@@ -86,12 +86,15 @@ def unsupported(params):
     if params["f_min"] is not None and params["f_max"] is not None:
         return ("f_min and f_max are both given: the population mode gives one state per row, at f_max (forward), "
                 "at f_min (backward) or at the end of the inspiral; give at most one of them")
-    # evolve's checks of the masses and frequencies: evolve_many takes its target on either side of f_ref (and NaN
-    # as the end of the inspiral), while a row's f_max must lie above f_ref and its f_min below, both finite
-    from pnrotor.pn import settings
+    # evolve's checks of the masses, spins and frequencies, in its order (so a row with two faults gets evolve's
+    # message): evolve_many takes its target on either side of f_ref (and NaN as the end of the inspiral), while
+    # a row's f_max must lie above f_ref and its f_min below, both finite
+    from pnrotor.pn import initial, settings
 
     try:
         given = settings.masses_and_frequencies(*(params[key] for key in ("m1", "m2", "f_ref", "f_min", "f_max")))
+        for name in ("chi1", "chi2"):
+            initial.spin_vector(params[name], name)
         settings.frequencies(*given)
     except ValueError as error:
         return str(error)

@@ -139,5 +139,9 @@ def _format(value):
     if isinstance(value, np.ndarray):
         if value.size <= 8:
             return f"{np.array2string(value, separator=', ', floatmode='unique')} {value.dtype}"
+        if value.dtype.kind not in "biuf":   # text (e.g. a population's per-row options): its distinct values
+            distinct = sorted({str(x) for x in value.flat})
+            return f"{value.shape} {value.dtype}, {len(distinct)} distinct: " + ", ".join(map(repr, distinct[:8])) + \
+                (", ..." if len(distinct) > 8 else "")
         return f"{value.shape} {value.dtype}, from {value.min().item()!r} to {value.max().item()!r}"
     return repr(value)
