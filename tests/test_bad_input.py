@@ -55,6 +55,11 @@ EVOLVE_CASES = [
     (dict(kappa1=NAN), "kappa1"), (dict(kappa2=INF), "kappa2"), (dict(kappa1=-1.0), "kappa1"),
     (dict(kappa2=True), "kappa2"), (dict(kappa1="soft"), "kappa1"), (dict(chi1=(True, 0.0, 0.0)), "chi1"),
     (dict(atol=True), "atol"), (dict(sampling=True), "sampling"),
+    # options of the wrong type name themselves (a review of 2026-11-27: TypeErrors, OverflowError, "no" as True)
+    (dict(atol="1e-12"), "atol"), (dict(atol=[1e-12]), "atol"), (dict(rtol=None), "rtol"),
+    (dict(pn_order="abc"), "pn_order"), (dict(pn_order=True), "pn_order"), (dict(max_steps=2 ** 70), "max_steps"),
+    (dict(max_steps=1e6), "max_steps"), (dict(integrate_rotor="no"), "integrate_rotor"),
+    (dict(integrate_rotor=1), "integrate_rotor"), (dict(precession_phase_shift="no"), "precession_phase_shift"),
 ]
 
 

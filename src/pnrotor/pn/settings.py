@@ -30,6 +30,8 @@ ROTORS = ("coprecessing", "orbital")
 MAX_MASS_RATIO = 1e6
 """Largest m1/m2 or m2/m1: runs stay meaningful to ~1e4 (a precessing q = 1e6 binary from v = 0.2 already
 exhausts max_steps), and beyond ~1e150 the mass fractions' squares underflow."""
+MAX_STEPS = 2**63 - 1
+"""Largest max_steps: the integrator counts its steps in int64."""
 V_MIN = 1e-3
 """Smallest v at f_ref or f_min: from v ≈ 0.01 down the PN inspiral spans ≳ 10⁹ orbits and the integration
 ends at step_underflow or max_steps; far lower (v⁸ < 1e-308) it would divide by zero."""
@@ -145,13 +147,17 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
     if rotor not in ROTORS:
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     mode, sval = parse_sampling(sampling)
-    if (isinstance(atol, bool) or isinstance(rtol, bool) or not (atol > 0.0 and math.isfinite(atol))
+    if (not _real(atol) or not _real(rtol) or not (atol > 0.0 and math.isfinite(atol))
             or not (rtol >= 0.0 and math.isfinite(rtol))):
-        raise ValueError(f"atol must be > 0 and rtol >= 0, both finite; got atol = {atol!r}, rtol = {rtol!r}")
-    if isinstance(max_steps, (bool, np.bool_)) or not isinstance(max_steps, (int, np.integer)):
-        raise ValueError(f"max_steps must be an integer >= 1, got {max_steps!r}")
-    if max_steps < 1:
-        raise ValueError(f"max_steps must be >= 1, got {max_steps!r}")
+        raise ValueError(f"atol must be > 0 and rtol >= 0, both finite numbers; got atol = {atol!r}, rtol = {rtol!r}")
+    if isinstance(max_steps, _ini._BOOLS) or not isinstance(max_steps, (int, np.integer)) \
+            or not 1 <= max_steps <= MAX_STEPS:
+        raise ValueError(f"max_steps must be an integer from 1 to {MAX_STEPS}, got {max_steps!r}")
+    if not isinstance(integrate_rotor, _ini._BOOLS):
+        raise ValueError(f"integrate_rotor must be True or False, got {integrate_rotor!r}")
+    if precession_phase_shift is not None and not isinstance(precession_phase_shift, _ini._BOOLS):
+        raise ValueError(f"precession_phase_shift must be None (on at spin-orbit order >= 3), True or False, got "
+                         f"{precession_phase_shift!r}")
     if precession not in PRECESSION:
         raise ValueError(f"precession must be 'averaged', 'averaged_varpi' or 'instantaneous', got {precession!r}")
     if precession == "instantaneous":
@@ -276,10 +282,19 @@ def _order(x, name, lo, hi):
     """A PN order: a multiple of 0.5 in [lo, hi]."""
     if x is None:
         raise ValueError(f"{name} is required")
-    x = float(x)
+    given = x
+    try:
+        x = math.nan if isinstance(x, _ini._BOOLS) else float(x)
+    except (TypeError, ValueError):
+        x = math.nan
     if not (lo <= x <= hi) or abs(2 * x - round(2 * x)) > 1e-12:
-        raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {x!r}")
+        raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {given!r}")
     return x
+
+
+def _real(x):
+    """Whether x is a real number (Python's or numpy's), not a bool."""
+    return isinstance(x, numbers.Real) and not isinstance(x, _ini._BOOLS)
 
 
 def parse_sampling(sampling):
