@@ -138,6 +138,20 @@ def test_plot_draws_modes_and_polarizations(tmp_path, capsys):
     assert main(["plot", str(tmp_path / "w.h5"), "--group", "modes", "--inclination", "0.7"]) == 0
     assert capsys.readouterr().out == f"wrote {tmp_path / 'w-modes.png'}\n"
     assert_sensible_png(tmp_path / "w-modes.png", (850, 1200))
+    assert main(["plot", str(tmp_path / "w.h5"), "--group", "modes", "--inclination", "nan", "-o",
+                 str(tmp_path / "nan.png")]) == 2
+    assert "inclination must be a finite angle" in capsys.readouterr().err and not (tmp_path / "nan.png").exists()
+
+
+def test_plot_refuses_a_population_table(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    (tmp_path / "p.csv").write_text('m1,m2,chi1,chi2,f_ref\n30,10,"0,0,0","0,0,0",100\n20,10,"0,0,0","0,0,0",100\n')
+    assert main(["evolve", "--batch", str(tmp_path / "p.csv"), "--population", "-o", str(tmp_path / "p.h5")]) == 0
+    capsys.readouterr()
+    assert main(["plot", str(tmp_path / "p.h5")]) == 2
+    err = capsys.readouterr().err
+    assert "final states of unrelated binaries" in err and err.count("\n") == 1
+    assert not (tmp_path / "p.png").exists()
 
 
 def test_plot_long_run_and_batch_group(files, tmp_path, capsys):

@@ -53,6 +53,9 @@ def run(args):
 
     result = hdf5.read(args.file, args.group)
     kind = type(result).__name__
+    if kind == "PopulationTable":
+        raise UsageError(f"{args.file} holds the final states of unrelated binaries (a PopulationTable): nothing to "
+                         "draw against time; `pnrotor inspect` or h5py reads it")
     post_newtonian = all(hasattr(result, name) for name in ("ell_hat", "v", "chi1", "chi2"))
     binary = None if post_newtonian or kind == "Modes" else _binary(result)
     figure = Figure(figsize=(12, 8.5 if binary is None else 12.5), layout="constrained")
