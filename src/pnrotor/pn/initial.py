@@ -30,7 +30,11 @@ def _positive(x, unit, name, what):
     name); must be finite and > 0, else a ValueError "`name` must be a finite positive `what`"."""
     u = sys.modules.get("astropy.units")   # a Quantity exists only if its module was imported
     if u is not None and isinstance(x, u.Quantity):
-        x = x.to_value(getattr(u, unit))
+        try:
+            x = x.to_value(getattr(u, unit))
+        except u.UnitsError:
+            raise ValueError(f"{name} must be a finite positive {what}, got {x!r} (not convertible to {unit})") \
+                from None
     try:
         if isinstance(x, _BOOLS):
             raise TypeError

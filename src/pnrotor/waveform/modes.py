@@ -129,7 +129,8 @@ class Modes:
                                                    np.sin(half))))
 
     def in_frame(self, frame):
-        """These modes in another frame (one of :data:`FRAMES`): h' = 𝔇(R'⁻¹ R) h."""
+        """These modes in another frame (one of :data:`FRAMES`): h' = 𝔇(R'⁻¹ R) h (in their own frame, these
+        modes themselves, not a copy)."""
         if frame not in FRAMES:
             raise ValueError(f"frame must be one of {', '.join(FRAMES)}; got {frame!r}")
         if frame == self.frame:
