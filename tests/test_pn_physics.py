@@ -247,7 +247,7 @@ def test_astropy_quantities():
     assert a.inputs["f_ref_Hz"] == 20.0 and a.inputs["sampling_value"] == 5e-4
     assert len(a) == len(b)
     for kw, name in ((dict(m1=10 * u.s), "m1"), (dict(f_ref=20 * u.m), "f_ref")):
-        with pytest.raises(ValueError, match=f"{name} must be a finite positive .* not convertible"):
+        with pytest.raises(ValueError, match=f"{name} must be a finite positive .*not convertible"):
             evolve(**{**dict(m1=10, m2=10, chi1=[0, 0, 0], chi2=[0, 0, 0], f_ref=20.0), **kw})
 
 
