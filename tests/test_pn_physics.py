@@ -239,6 +239,20 @@ def test_invalid_inputs():
         evolve(10, 10, [0, 0, 0], [0, 0, 0], 2000.0)           # beyond the end of the T4 inspiral
 
 
+@pytest.mark.parametrize("approximant, atol, sampling", [("T1", 1e-3, "steps"), ("T4", 1000.0, "steps"),
+                                                        ("T4", 1000.0, 1 / 4096)])
+def test_loose_tolerances_never_give_non_finite_samples(approximant, atol, sampling):
+    """A step accepted just before a terminal event can have stages of its interpolant past it, where the
+    right-hand side diverges: the event's state came out NaN (with termination energy_balance) until such a
+    step was rejected as a non-finite one is."""
+    chi = ((0.6, 0.0, 0.2), (0.0, -0.4, 0.1)) if approximant == "T1" else ((0, 0, 0), (0, 0, 0))
+    run = evolve(30.0, 10.0, *chi, 20.0 if approximant == "T1" else 100.0, approximant=approximant, atol=atol,
+                 sampling=sampling)
+    assert run.termination == "energy_balance"
+    for name in ("t", "v", "Phi", "chi1", "chi2", "R", "ell_hat"):
+        assert np.all(np.isfinite(getattr(run, name))), name
+
+
 def test_astropy_quantities():
     from astropy import units as u
     a = evolve(10 * u.M_sun, 1.98847e31 * u.kg, [0, 0, 0], [0, 0, 0], 0.02 * u.kHz, sampling=0.5 * u.ms)

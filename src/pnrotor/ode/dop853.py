@@ -673,6 +673,15 @@ def _dop853_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_st
         if need_dense:
             _dense_coefficients(rhs, t, y, ynew, h, p, K, ys, rc)
             nfev += 3
+            if not _all_finite(rc.reshape(rc.size)):
+                # a stage of the interpolant left the right-hand side's domain (e.g. past a terminal event of
+                # the PN system, where it diverges): the step is rejected, as for a non-finite error, so that no
+                # event or sample comes from a non-finite interpolant
+                nacc -= 1
+                nrej += 1
+                ivals[IV_NANREJ] = 1
+                h_abs = abs(h) * min_factor
+                continue
         if want_dense:
             seg_t, seg_h, seg_c, nseg = _append_segment(seg_t, seg_h, seg_c, nseg, t, h, rc)
 
