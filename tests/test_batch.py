@@ -126,6 +126,78 @@ def test_resume_refuses_the_runs_of_another_table(table, tmp_path, monkeypatch):
         batch.run(table, tmp_path / "out.h5", jobs=1, resume=True)
 
 
+@pytest.mark.parametrize("change", ["without the bad row", "with other storage options"])
+def test_resume_refuses_shifted_rows_and_other_options(table, tmp_path, monkeypatch, change):
+    """The part files are named by row position: removing a row that failed its checks shifts the others,
+    and would have put a row's run under the next row's name; other storage options would give a mixed file."""
+    unreadable = 'abc,10,"0,0,0","0,0,0",100,,,unreadable\n'    # fails when the table is read
+    table.write_text(CSV.replace("-5,", "5,") + unreadable + '25,10,"0,0,0","0,0,0",100,,,d\n')
+    interrupt_third_run(monkeypatch)
+    with pytest.raises(KeyboardInterrupt):
+        batch.run(table, tmp_path / "out.h5", jobs=1)
+    options = {}
+    if change == "without the bad row":
+        table.write_text(table.read_text().replace(unreadable, ""))
+    else:
+        options = dict(compression="gzip")
+    with pytest.raises(ValueError, match="holds runs of another table, or of other options"):
+        batch.run(table, tmp_path / "out.h5", jobs=1, resume=True, **options)
+
+
+def test_resume_computes_a_damaged_part_again(table, tmp_path, monkeypatch):
+    real = batch.backends.evolve_row
+    interrupt_third_run(monkeypatch)
+    with pytest.raises(KeyboardInterrupt):
+        batch.run(table, tmp_path / "out.h5", jobs=1)
+    part = tmp_path / "out.h5.parts" / "run-0.h5"
+    data = bytearray(part.read_bytes())
+    run = hdf5.read(part, "0")
+    at = data.find(run.v.tobytes()[:16])   # a byte of the run's v: Fletcher-32 catches it
+    data[at + 3] ^= 0x10
+    part.write_bytes(bytes(data))
+    calls = []
+    monkeypatch.setattr(batch.backends, "evolve_row", lambda params: calls.append(params) or real(params))
+    outcome = batch.run(table, tmp_path / "out.h5", jobs=1, resume=True)
+    assert outcome.written == 3
+    assert [params["m1"] for params in calls] == [30.0, -5.0, 12.0]   # the damaged run and the two not computed
+    for name, kw in zip("abc", ROWS):
+        assert_same_run(hdf5.read(tmp_path / "out.h5", name), pnrotor.evolve(**kw))
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_a_run_that_cannot_be_written_fails_its_row_only(table, tmp_path, monkeypatch, jobs):
+    """A run pnrotor.hdf5 refuses to write (here one with a NaN sample) fails its row; it stopped the whole
+    batch, and every --resume of it."""
+    real = batch.backends.evolve_row
+
+    def nan_for_b(params):
+        run = real(params)
+        if params["m1"] == 20.0:
+            run.v[3] = np.nan
+        return run
+
+    monkeypatch.setattr(batch.backends, "evolve_row", nan_for_b)
+    outcome = batch.run(table, tmp_path / "out.h5", jobs=jobs)
+    assert [row.name for row in outcome.failed] == ["b", "bad"]
+    assert outcome.failed[0].error.startswith("its run cannot be written: cannot write this Evolution: dataset 'v' "
+                                              "has 1 non-finite value")
+    assert sorted(hdf5.list_runs(tmp_path / "out.h5")) == ["a", "c"]
+
+
+def test_run_restores_the_callers_ctrl_c_handler(table, tmp_path):
+    import signal
+
+    def mine(signum, frame):
+        pass
+
+    previous = signal.signal(signal.SIGINT, mine)
+    try:
+        batch.run(table, tmp_path / "out.h5", jobs=1)
+        assert signal.getsignal(signal.SIGINT) is mine
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 KILLED_SERIAL = """
 import sys, time
 from pnrotor import batch

@@ -104,16 +104,17 @@ class Plan:
         try:
             with interrupted.deferred(), _progress_bar(len(tasks), enabled=progress) as bar:
                 for index, ok, result in interrupted.interruptible(results):
+                    if ok and not isinstance(result, backends.Stored):   # this process's run: to its part file
+                        ok, result = backends.store_row(result, self.parts, index, self.storage)
                     if ok:
-                        if not isinstance(result, backends.Stored):   # this process's run: to its part file
-                            result = backends.store(result, self.parts, index, self.storage)
                         done[index] = result
                         evolve_seconds += result.brief["wall_time_s"]
                     else:
                         self.rows[index].error = result
                     bar.update()
         except KeyboardInterrupt:
-            raise KeyboardInterrupt(f"{len(done)} finished run{'s' * (len(done) != 1)} kept in {self.parts}; "
+            kept = len(list(self.parts.glob("run-*.h5")))   # the workers' too, not only those reported yet
+            raise KeyboardInterrupt(f"{kept} finished run{'s' * (kept != 1)} kept in {self.parts}; "
                                     "complete the batch with --resume (resume=True)") from None
         finally:
             results.close()  # stops the workers early after an error or Ctrl-C
@@ -128,20 +129,27 @@ class Plan:
         if done:
             from pnrotor import hdf5
 
-            with _InterruptFlag().deferred(), hdf5.batch(self.path, overwrite=self.overwrite, **self.storage) as out:
-                for index in sorted(done):
-                    out.copy_from(done[index].path, done[index].group, self.rows[index].name)
-                    if self.modes is not None:
-                        out.copy_from(done[index].path, done[index].group + backends.MODES_SUFFIX,
-                                      self.rows[index].name + backends.MODES_SUFFIX)
+            interrupted = _InterruptFlag()
+            try:
+                with interrupted.deferred(), hdf5.batch(self.path, overwrite=self.overwrite, **self.storage) as out:
+                    for index in sorted(done):
+                        out.copy_from(done[index].path, done[index].group, self.rows[index].name)
+                        if self.modes is not None:
+                            out.copy_from(done[index].path, done[index].group + backends.MODES_SUFFIX,
+                                          self.rows[index].name + backends.MODES_SUFFIX)
+            finally:
+                interrupted.restore()
         if self.parts.exists():
             shutil.rmtree(self.parts)
         return len(done)
 
     def _fingerprint(self):
-        """What identifies the table: every row's name and parameters, and the modes asked for."""
-        text = "\n".join(f"{row.name}\t{sorted(row.params.items())!r}" for row in self.rows if row.error is None)
+        """What identifies the runs a batch stores: every row at its position (the part files are named by it;
+        a row that failed its checks by its message), the modes asked for and the storage options."""
+        text = "\n".join(f"{i}\t{row.name}\t{sorted(row.params.items())!r}" if row.error is None else
+                         f"{i}\terror\t{row.error}" for i, row in enumerate(self.rows))
         text += f"\nmodes {self.modes!r}" if self.modes is not None else ""
+        text += f"\nstorage {sorted(self.storage.items())!r}"
         return hashlib.sha256(text.encode()).hexdigest() + "\n"
 
     def _stored(self):
@@ -152,17 +160,17 @@ class Plan:
             return {}
         table = self.parts / _TABLE
         if not table.exists() or table.read_text() != self._fingerprint():
-            raise ValueError(f"{self.parts} holds runs of another table (or of an older version of it); remove "
-                             "the folder to start the batch afresh")
+            raise ValueError(f"{self.parts} holds runs of another table, or of other options (modes, compression, "
+                             "checksum), or of an older version of them; remove the folder to start the batch afresh")
         done = {}
         for part in sorted(self.parts.glob("*.h5")):
-            try:
-                groups = hdf5.list_runs(part)
-            except (OSError, ValueError):  # a part a kill cut short: its runs are computed again
+            try:  # a part a kill cut short, or damaged: its runs are computed again
+                runs = {group: hdf5.read(part, group) for group in hdf5.list_runs(part)}
+            except (OSError, ValueError):
                 continue
-            for group in groups:
+            for group, run in runs.items():
                 if group.isdigit() and int(group) < len(self.rows):
-                    done[int(group)] = backends.Stored(part, group, backends.brief(hdf5.read(part, group)))
+                    done[int(group)] = backends.Stored(part, group, backends.brief(run))
         return done
 
     def _make_folder(self):

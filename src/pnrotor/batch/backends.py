@@ -80,6 +80,15 @@ def store(result, folder, index, storage):
     return Stored(path, str(index), brief(run))
 
 
+def store_row(result, folder, index, storage):
+    """:func:`store` → (True, Stored), or (False, message) for a run that `pnrotor.hdf5` refuses to write (e.g.
+    a non-finite sample): that row fails, not the batch."""
+    try:
+        return True, store(result, folder, index, storage)
+    except ValueError as error:
+        return False, f"its run cannot be written: {error}"
+
+
 def write_chunk(chunk, folder, storage):
     """`attempt` on each (index, params) of a chunk, each finished run written at once into its own part file
     in `folder` (:func:`store`, so a killed worker loses only the run it was computing) → [(index, ok, Stored
@@ -89,7 +98,7 @@ def write_chunk(chunk, folder, storage):
     results = []
     for index, params in chunk:
         ok, result = attempt(params)
-        results.append((index, ok, store(result, folder, index, storage) if ok else result))
+        results.append((index, *(store_row(result, folder, index, storage) if ok else (ok, result))))
     return results
 
 
