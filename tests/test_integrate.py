@@ -167,6 +167,17 @@ def test_t_eval_and_dense_output():
         integrate_angular_velocity(BINARY, (0, 5e3), R0, method="BS", dense=True)
 
 
+@pytest.mark.parametrize("formulation", FORMS)
+@pytest.mark.parametrize("t_eval", ["final", [3.5, 4.0], [4.0]])
+def test_samples_after_the_start_keep_the_sign_of_the_solution(formulation, t_eval):
+    """Constant ω: R(t) = exp(ωt/2) R₀, whose scalar part is negative at t = 4 for |ω| = 1.  Samples that do
+    not include t₀ were flipped to agree with R₀ (R(t)·R₀ < 0 there)."""
+    omega, R_start = np.array([1.0, 0.0, 0.0]), np.array([0.6, 0.0, 0.8, 0.0])
+    h = integrate_angular_velocity(lambda t: omega, (0.0, 4.0), R_start, formulation, t_eval=t_eval, atol=1e-12)
+    exact = quat.multiply(quat.exp(0.5 * np.outer(h.t, omega)), R_start)
+    np.testing.assert_allclose(h.R, exact, rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("kwargs, match", [
     (dict(formulation="matrix"), "unknown formulation"),
     (dict(method="RK45"), "unknown method"),

@@ -229,22 +229,28 @@ class Formulation:
     to_rotors: Callable
     continuous: bool
 
-    def rotors(self, Y, R_ref, t, omega_at):
-        """Unit rotors (N, 4) of states Y (N, size) at times t (N,), sign-continuous, with R[0]·R_ref ≥ 0.
+    def rotors(self, Y, R_ref, t, omega_at, t_ref=None):
+        """Unit rotors (N, 4) of states Y (N, size) at times t (N,), sign-continuous from the rotor R_ref at
+        t_ref (default t[0]), the start of the integration.
 
-        ``omega_at(ts)`` returns ω at an array of times, shape (len(ts), 3); it is used only by the
-        formulations whose rotor sign is not continuous by itself (see the module docstring).
+        A continuous formulation's rotors keep the sign they have at the start against R_ref (that of its
+        initial state's rotor), whatever the samples.  For the others each sample's sign follows its
+        predecessor's, the first's R_ref's, by the midpoint prediction of the module docstring:
+        ``omega_at(ts)`` returns ω at an array of times, shape (len(ts), 3).
         """
         R = self.to_rotors(np.asarray(Y, dtype=np.float64))
-        if not self.continuous and len(R) > 1:
-            dt = np.diff(t)
-            predicted = quat.multiply(quat.exp(0.5 * dt[:, None] * omega_at(t[:-1] + 0.5 * dt)), R[:-1])
-            # flipping sample i flips its agreement with sample i + 1: the signs are a running product
-            agree = np.einsum("ij,ij->i", R[1:], predicted) >= 0.0
-            R[1:] *= np.cumprod(np.where(agree, 1.0, -1.0))[:, None]
-        if len(R) and np.dot(R[0], R_ref) < 0.0:
-            R = -R
-        return R
+        if not len(R):
+            return R
+        if self.continuous:
+            start = self.to_rotors(self.initial_state(np.asarray(R_ref, dtype=np.float64))[None, :])[0]
+            return R if np.dot(start, R_ref) >= 0.0 else -R
+        t = np.concatenate(([t[0] if t_ref is None else t_ref], t))
+        R = np.concatenate((np.asarray(R_ref, dtype=np.float64)[None, :], R))
+        dt = np.diff(t)
+        predicted = quat.multiply(quat.exp(0.5 * dt[:, None] * omega_at(t[:-1] + 0.5 * dt)), R[:-1])
+        # flipping sample i flips its agreement with sample i + 1: the signs are a running product
+        agree = np.einsum("ij,ij->i", R[1:], predicted) >= 0.0
+        return R[1:] * np.cumprod(np.where(agree, 1.0, -1.0))[:, None]
 
 
 FORMULATIONS = {

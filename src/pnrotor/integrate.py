@@ -155,7 +155,7 @@ def integrate_angular_velocity(omega, t_span, R0, formulation="rotor", method="D
     wall = time.perf_counter() - start
 
     return FrameHistory(
-        t=res.t, R=form.rotors(res.y, R0, res.t, omega_at), formulation=form.name, method=method,
+        t=res.t, R=form.rotors(res.y, R0, res.t, omega_at, t0), formulation=form.name, method=method,
         atol=float(atol), rtol=float(rtol), nfev=res.nfev, nsteps=res.nsteps, naccepted=res.naccepted,
         nrejected=res.nrejected, n_resets=res.n_modified, status=res.status, message=res.message,
         wall_time=wall, inputs=inputs, dense=res.dense)
