@@ -184,6 +184,32 @@ def test_a_run_that_cannot_be_written_fails_its_row_only(table, tmp_path, monkey
     assert sorted(hdf5.list_runs(tmp_path / "out.h5")) == ["a", "c"]
 
 
+def test_a_second_batch_on_the_same_output_fails_at_once(table, tmp_path, monkeypatch):
+    """Two batches writing one output shared its part files (run-INDEX.h5): one table's runs came out under the
+    other's names.  The running batch holds a lock in OUTPUT.parts; a second one fails before computing."""
+    import fcntl
+
+    first = batch.plan(table, tmp_path / "out.h5", jobs=1)        # planned while the output is free
+    second = batch.plan(table, tmp_path / "out.h5", jobs=1)
+    real = batch.backends.evolve_row
+
+    def run_second_meanwhile(params):
+        if params["m1"] == 30.0:
+            with pytest.raises(FileExistsError, match="another batch is writing .*out.h5"):
+                second.run()
+        return real(params)
+
+    monkeypatch.setattr(batch.backends, "evolve_row", run_second_meanwhile)
+    outcome = first.run()
+    assert outcome.written == 3 and sorted(os.listdir(tmp_path)) == ["binaries.csv", "out.h5"]
+    (tmp_path / "p.parts").mkdir()   # and the lock is an flock: held by another open file, it refuses too
+    with open(tmp_path / "p.parts" / "lock", "a") as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        with pytest.raises(FileExistsError, match="another batch is writing"):
+            batch.run(table, tmp_path / "p", jobs=1, resume=True)
+    assert os.listdir(tmp_path / "p.parts") == ["lock"]
+
+
 def test_run_restores_the_callers_ctrl_c_handler(table, tmp_path):
     import signal
 

@@ -78,7 +78,7 @@ def test_rows_equal_single_evolve_bitwise_and_failures_fail_alone(in_tmp, capsys
     code, out, err = evolve(capsys, "--batch", "t.csv", "--population", "-o", "pop.h5")
     assert code == 1 and err == ""
     lines = out.splitlines()
-    assert lines[0] == ("pnrotor evolve --batch t.csv --population: 11 binaries (3 with bad values), final states by "
+    assert lines[0] == ("pnrotor evolve --batch t.csv --population: 11 binaries (4 with bad values), final states by "
                         "evolve_many in 4 calls")   # T4 · T1 at 1e-10 · pn_order 3 · pn_order 5
     assert lines[1:-1] == FAILED
     assert lines[-1].startswith("wrote 6 final states to pop.h5; 5 failed; ") and lines[-1].endswith(" rows/s)")

@@ -88,13 +88,15 @@ class Plan:
         """Compute the rows (those not already in :attr:`parts` with ``resume``), then write the batch file
         (module docstring) → :class:`Outcome`; ``progress`` shows a tqdm bar on stderr."""
         start = time.perf_counter()
+        with self._claimed():
+            return self._run(start, progress)
+
+    def _run(self, start, progress):
         done = self._stored() if self.resume else {}
         tasks = [(i, params) for i, params in self.tasks if i not in done]
-        if self.scheduler is not None:   # first: a scheduler it cannot use leaves nothing behind
+        if self.scheduler is not None:
             results = backends.results_dask(tasks, self.scheduler)
         if self.tasks:
-            self._make_folder()
-            self.parts.mkdir(exist_ok=True)
             (self.parts / _TABLE).write_text(self._fingerprint())
         if self.scheduler is None:
             results = (backends.results_serial(tasks) if self.jobs == 1 or len(tasks) <= 1 else
@@ -173,13 +175,46 @@ class Plan:
                     done[int(group)] = backends.Stored(part, group, backends.brief(run))
         return done
 
-    def _make_folder(self):
-        if self.create_folder and self.tasks:
-            self.path.parent.mkdir(exist_ok=True)
+    @contextlib.contextmanager
+    def _claimed(self):
+        """:attr:`parts` (made if need be, and the output's folder with ``create_folder``) held under an
+        exclusive lock while the batch runs: a second batch writing the same output fails at once (their runs
+        would share its part files), and the folders this batch made are removed if it stops before keeping a
+        run (a Dask scheduler it cannot use, say)."""
+        if not self.tasks:
+            yield
+            return
+        made_folder = self.create_folder and not self.path.parent.exists()
+        if made_folder:
+            self.path.parent.mkdir()
+        made = not self.parts.exists()
+        self.parts.mkdir(exist_ok=True)
+        try:
+            with open(self.parts / _LOCK, "a") as lock:
+                try:
+                    import fcntl
+                except ImportError:  # pragma: no cover - not POSIX: no lock
+                    fcntl = None
+                if fcntl is not None:
+                    try:
+                        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                    except BlockingIOError:
+                        made = False
+                        raise FileExistsError(f"another batch is writing {self.path} (its runs are in {self.parts})"
+                                              "; wait for it to finish") from None
+                yield
+        except BaseException:
+            if made and self.parts.is_dir() and not any(self.parts.glob("run-*.h5")):
+                shutil.rmtree(self.parts)
+                if made_folder and not any(self.path.parent.iterdir()):
+                    self.path.parent.rmdir()
+            raise
 
 
 _TABLE = "table.sha256"
 """In the parts folder: the fingerprint of the table whose runs it holds."""
+_LOCK = "lock"
+"""In the parts folder: the file a running batch holds its exclusive lock on (``flock``)."""
 
 
 def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compression=None, checksum=True,
