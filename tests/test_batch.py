@@ -210,6 +210,26 @@ def test_a_second_batch_on_the_same_output_fails_at_once(table, tmp_path, monkey
     assert os.listdir(tmp_path / "p.parts") == ["lock"]
 
 
+def test_a_worker_killed_once_loses_no_run(table, tmp_path, monkeypatch):
+    """A worker killed (as the out-of-memory killer would) broke the pool and every row not finished failed, the
+    finished ones too (their part files were removed): the lost rows now go to a new pool once."""
+    import signal
+
+    real, marker = batch.backends.evolve_row, tmp_path / "killed"
+
+    def die_once(params):
+        if params["m1"] == 20.0 and not marker.exists():
+            marker.touch()
+            os.kill(os.getpid(), signal.SIGKILL)
+        return real(params)
+
+    monkeypatch.setattr(batch.backends, "evolve_row", die_once)    # seen by forked workers
+    outcome = batch.run(table, tmp_path / "out.h5", jobs=2)
+    assert marker.exists() and [row.name for row in outcome.failed] == ["bad"]
+    for name, kw in zip("abc", ROWS):
+        assert_same_run(hdf5.read(tmp_path / "out.h5", name), pnrotor.evolve(**kw))
+
+
 def test_run_restores_the_callers_ctrl_c_handler(table, tmp_path):
     import signal
 

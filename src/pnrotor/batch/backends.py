@@ -175,21 +175,25 @@ def results_pool(tasks, jobs, context=None, chunksize=None, parts=None, storage=
     if mp_context.get_start_method() == "forkserver":
         # the server dies with this process (and its workers with it), then loads the PN code once
         mp_context.set_forkserver_preload(["pnrotor.batch.forkserver", "pnrotor.pn.evolve"])
-    pool = ProcessPoolExecutor(max_workers=min(jobs, len(chunks)), mp_context=mp_context, initializer=_preload)
-    futures = {}
-    try:
-        for chunk in chunks:
-            if parts is None:
-                futures[pool.submit(attempt_chunk, chunk)] = chunk
-            else:
-                futures[pool.submit(write_chunk, chunk, parts, storage or {})] = chunk
-    except BrokenProcessPool:
-        pass  # a worker died at start-up: the chunks not submitted are reported below
-    except BaseException:
-        _stop(pool)
-        raise
-    unsubmitted = chunks[len(futures):]
-    return _pool_results(pool, futures, unsubmitted)
+
+    def start(chunks):
+        """A pool on `chunks` → (pool, {future: chunk}, chunks not submitted because a worker died at once)."""
+        pool = ProcessPoolExecutor(max_workers=min(jobs, len(chunks)), mp_context=mp_context, initializer=_preload)
+        futures = {}
+        try:
+            for chunk in chunks:
+                if parts is None:
+                    futures[pool.submit(attempt_chunk, chunk)] = chunk
+                else:
+                    futures[pool.submit(write_chunk, chunk, parts, storage or {})] = chunk
+        except BrokenProcessPool:
+            pass  # a worker died at start-up: the chunks not submitted are lost with the others
+        except BaseException:
+            _stop(pool)
+            raise
+        return pool, futures, chunks[len(futures):]
+
+    return _pool_results(start, start(chunks))
 
 
 def _stop(pool):
@@ -199,26 +203,35 @@ def _stop(pool):
     pool.shutdown(wait=True)
 
 
-def _pool_results(pool, futures, unsubmitted):
+def _pool_results(start, first):
+    """(index, ok, result) of every row of the pool `first` (:func:`results_pool`'s ``start``, already called).
+    A worker that dies (killed, out of memory) breaks its whole pool, and with it every chunk not finished:
+    those go to a new pool once, and fail only if a worker dies there too (a row that kills its worker every
+    time)."""
     from concurrent.futures import as_completed
     from concurrent.futures.process import BrokenProcessPool
 
-    completed = False
-    try:
-        for future in as_completed(futures):
-            try:
-                results = future.result()
-            except BrokenProcessPool as error:
-                results = [(index, False, f"worker process died ({error})") for index, _ in futures[future]]
-            yield from results
-        for chunk in unsubmitted:
-            yield from ((index, False, "worker process died at start-up") for index, _ in chunk)
-        completed = True
-    finally:
-        if completed:
-            pool.shutdown(wait=True)
-        else:
-            _stop(pool)
+    for retry in (False, True):
+        pool, futures, lost = start(lost) if retry else first
+        completed = False
+        try:
+            for future in as_completed(futures):
+                try:
+                    results = future.result()
+                except BrokenProcessPool:
+                    lost.append(futures[future])
+                    continue
+                yield from results
+            completed = True
+        finally:
+            if completed:
+                pool.shutdown(wait=True)
+            else:
+                _stop(pool)
+        if not lost:
+            return
+    for chunk in lost:
+        yield from ((index, False, "its worker process died, twice (killed, or out of memory?)") for index, _ in chunk)
 
 
 def results_dask(tasks, address):
