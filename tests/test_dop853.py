@@ -462,6 +462,29 @@ def test_nonfinite_rhs_at_start():
     assert "NaN" in r.message and r.nsteps == 0
 
 
+@pytest.mark.parametrize("solver", ["dop853", "bulirsch_stoer"])
+def test_pure_relative_tolerance_with_a_state_component_at_zero(solver):
+    """atol = 0 with rtol > 0 is allowed; a component that starts at 0 (y' = 0 of the oscillator) made a
+    bare ZeroDivisionError (the initial step's and the error's scales are 0 there)."""
+    from pnrotor.ode import bulirsch_stoer
+
+    call = dop853 if solver == "dop853" else bulirsch_stoer
+    r = call(oscillator, 0.0, [1.0, 0.0], 10.0, atol=0.0, rtol=1e-10, args=(W,))
+    assert r.status == STATUS_SUCCESS
+    np.testing.assert_allclose(r.y[-1], osc_exact(10.0), rtol=0, atol=1e-7)
+
+
+def test_overflowing_error_norms_end_at_once():
+    """atol = 1e-300 overflows the scaled norms: the initial step was NaN and max_steps went by at t0 (11
+    million evaluations); now a step underflow once the rejected steps have shrunk it from 1e-6 to the
+    ulps of t (~660 of them).  A huge state gave a zero initial step and a ZeroDivisionError."""
+    r = dop853(oscillator, 0.0, [1.0, 0.0], 10.0, atol=1e-300, args=(W,))
+    assert r.status == STATUS_STEP_UNDERFLOW and r.nfev < 10_000 and "at or near zero" in r.message
+    big = dop853(oscillator, 0.0, [1e150, 0.0], 10.0, atol=1e-8, rtol=1e-8, args=(W,))
+    assert big.status == STATUS_SUCCESS
+    np.testing.assert_allclose(big.y[-1] / 1e150, osc_exact(10.0), rtol=0, atol=1e-6)
+
+
 def test_blow_up_terminates():
     r = dop853(blow_up, 0.0, [1.0], 2.0, atol=1e-8, rtol=1e-8)
     # the numerical solution lags the singularity by a hair; it cannot get far past it

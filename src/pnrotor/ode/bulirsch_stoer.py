@@ -45,8 +45,8 @@ from numba import njit, types
 
 from .dop853 import (AFTER_STEP_TYPE, FV_H, FV_T, FV_TFAIL, IV_NACC, IV_NANREJ, IV_NFEV, IV_NMOD, IV_NOUT,
                      IV_NREJ, IV_NSTEPS, IV_STATUS, OUT_FINAL, OUT_STEPS, OUT_TEVAL, RHS_TYPE, _A1, _A2, _I1,
-                     _all_finite, _append_row, _common_inputs, _entry_point, _f8, _i8, _result, _trivial_result,
-                     select_initial_step)
+                     _all_finite, _append_row, _common_inputs, _entry_point, _f8, _i8, _result, _scaled,
+                     _trivial_result, select_initial_step)
 from .result import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_SUCCESS
 
 K_MAX_DEFAULT = 9
@@ -158,7 +158,7 @@ def _bs_core(rhs, after_step, t0, y0, t_end, p, atol, rtol, first_step, max_step
         acc_col = -1
         t_new = t
         while True:
-            if h_abs < min_step:
+            if not h_abs >= min_step:   # NaN too
                 status = STATUS_STEP_UNDERFLOW
                 fvals[FV_TFAIL] = t
                 break
@@ -198,7 +198,7 @@ def _bs_core(rhs, after_step, t0, y0, t_end, p, atol, rtol, first_step, max_step
                 s = 0.0
                 for i in range(n):
                     sc = atol[i] + rtol[i] * max(abs(y[i]), abs(tab[j, i]))
-                    e = (tab[j, i] - tab[j - 1, i]) / sc
+                    e = _scaled(tab[j, i] - tab[j - 1, i], sc)
                     s += e * e
                 err = math.sqrt(s / n)
                 if not math.isfinite(err):

@@ -273,11 +273,20 @@ def _append_segment(seg_t, seg_h, seg_c, nseg, t, h, rc):
 
 
 @njit(cache=True)
+def _scaled(x, sc):
+    """x / sc for an error scale sc = atol + rtol |y| ≥ 0.  sc = 0 (atol = 0 where y = 0, a pure relative
+    tolerance) allows no error: a zero x is none, any other an infinite one (the step is rejected)."""
+    if sc > 0.0:
+        return x / sc
+    return 0.0 if x == 0.0 else math.inf
+
+
+@njit(cache=True)
 def _rms_scaled(x, y, atol, rtol):
-    """RMS of x / (atol + rtol |y|)."""
+    """RMS of x / (atol + rtol |y|) (:func:`_scaled`)."""
     s = 0.0
     for i in range(x.size):
-        r = x[i] / (atol[i] + rtol[i] * abs(y[i]))
+        r = _scaled(x[i], atol[i] + rtol[i] * abs(y[i]))
         s += r * r
     return math.sqrt(s / x.size)
 
@@ -298,19 +307,23 @@ def select_initial_step(rhs, t0, y0, f0, p, t_end, max_step, order, atol, rtol, 
         h0 = 1e-6
     else:
         h0 = 0.01 * d0 / d1
+    if not 0.0 < h0 < math.inf:   # the norms overflowed (a tolerance near zero)
+        h0 = 1e-6
     h0 = min(h0, interval)
     for i in range(n):
         y1[i] = y0[i] + h0 * direction * f0[i]
     rhs(t0 + h0 * direction, y1, p, f1)
     s = 0.0
     for i in range(n):
-        r = (f1[i] - f0[i]) / (atol[i] + rtol[i] * abs(y0[i]))
+        r = _scaled(f1[i] - f0[i], atol[i] + rtol[i] * abs(y0[i]))
         s += r * r
     d2 = math.sqrt(s / n) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
     else:
         h1 = (0.01 / max(d1, d2)) ** (1.0 / (order + 1))
+    if not h1 > 0.0:   # the norms overflowed, or are infinite (a zero tolerance where the state is 0)
+        h1 = h0
     return min(100.0 * h0, h1, interval, max_step)
 
 
@@ -383,8 +396,8 @@ def _dop853_step(rhs, t, y, yc, h, p, K, ys, ynew, ycnew, atol, rtol):
         e3 = bk - _BHH0 * K[0, i] - _BHH8 * K[8, i] - _BHH11 * K[11, i]
         e5 = (E5[0] * K[0, i] + E5[5] * K[5, i] + E5[6] * K[6, i] + E5[7] * K[7, i] + E5[8] * K[8, i]
               + E5[9] * K[9, i] + E5[10] * K[10, i] + E5[11] * K[11, i])
-        e3 /= sc
-        e5 /= sc
+        e3 = _scaled(e3, sc)
+        e5 = _scaled(e5, sc)
         err3 += e3 * e3
         err5 += e5 * e5
     deno = err5 + 0.01 * err3
@@ -610,7 +623,7 @@ def _dop853_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_st
         t_new = t
         h = 0.0
         while True:
-            if h_abs < min_step:
+            if not h_abs >= min_step:   # NaN too
                 status = STATUS_STEP_UNDERFLOW
                 fvals[FV_TFAIL] = t
                 break
@@ -945,7 +958,8 @@ def _status_message(status, iv, fv):
     if status < 0 and math.isfinite(fv[FV_TFAIL]):
         msg = msg.rstrip(".") + f" (at t = {float(fv[FV_TFAIL])!r})."
     if status == STATUS_STEP_UNDERFLOW and iv[IV_NANREJ]:
-        msg += " The last error estimate was NaN or infinite: the right-hand side produced non-finite values."
+        msg += (" The last error estimate was NaN or infinite: the right-hand side produced non-finite values, or"
+                " a tolerance at or near zero (atol = 0 where the state is 0) allowed no error.")
     return msg
 
 
