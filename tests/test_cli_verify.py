@@ -80,6 +80,11 @@ def test_bench_writes_the_table_figures_and_findings(tmp_path, capsys):
 def test_bench_rejects_bad_input(tmp_path, capsys):
     assert main(["bench", "--atols", "0", "-o", str(tmp_path)]) == 2
     assert "--atols" in capsys.readouterr().err
+    for command in ("bench", "verify"):   # bench checked it after ~30 runs, its output folder made
+        with pytest.raises(SystemExit) as parsed:
+            main([command, "--damping", "nan", "1", "-o", str(tmp_path / "b")])
+        assert parsed.value.code == 2 and "--damping: must be a finite number" in capsys.readouterr().err
+        assert not (tmp_path / "b").exists()
 
 
 def test_bench_pn_writes_the_work_precision_study(tmp_path, capsys, monkeypatch):

@@ -187,6 +187,8 @@ def test_samples_after_the_start_keep_the_sign_of_the_solution(formulation, t_ev
     (dict(t_span=5.0), "t_span"),
     (dict(omega=lambda t: [1.0, 2.0]), "three finite floats"),
     (dict(formulation="vectors-damped", damping=(math.nan, 1.0)), "damping"),
+    (dict(atol=np.full(4, 1e-10)), "atol and rtol must be numbers"),   # ran, then failed as a TypeError
+    (dict(rtol="0"), "atol and rtol must be numbers"),
 ])
 def test_invalid_input(kwargs, match):
     args = dict(omega=BINARY, t_span=(0, 10.0), R0=R0) | kwargs

@@ -8,6 +8,7 @@ and returns the unit, sign-continuous rotors with the integrator's statistics as
 """
 
 import math
+import numbers
 import time
 
 import numpy as np
@@ -122,6 +123,9 @@ def integrate_angular_velocity(omega, t_span, R0, formulation="rotor", method="D
     """
     form = formulations.get(formulation)
     method = method_name(method)
+    if not all(isinstance(x, numbers.Real) and not isinstance(x, bool) for x in (atol, rtol)):
+        raise ValueError(f"atol and rtol must be numbers (one tolerance for every state component), got "
+                         f"atol = {atol!r}, rtol = {rtol!r}")
     try:
         t0, t_end = (float(x) for x in t_span)
     except (TypeError, ValueError):

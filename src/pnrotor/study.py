@@ -257,7 +257,8 @@ def findings(rows, t_end):
         at_delta = [cost_at(rows, *bs, key, target) / cost_at(rows, *dp, key, target)
                     for key in ("steps", "nfev", "wall_s")]
         lines.append(f"    {name}: at equal atol {' / '.join(f'{x:.2f}' for x in at_atol)}; "
-                     f"at max δ = {target:g} {' / '.join(f'{x:.2f}' for x in at_delta)}")
+                     f"at max δ = {target:g} "
+                     + (" / ".join(f"{x:.2f}" for x in at_delta) if math.isfinite(at_delta[0]) else "n/a"))
     return lines
 
 

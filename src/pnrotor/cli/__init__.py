@@ -11,6 +11,7 @@ one line with exit status 1; Ctrl-C, SIGTERM and SIGHUP stop a command with exit
 
 import argparse
 import importlib
+import math
 import signal
 import sys
 import threading
@@ -25,8 +26,16 @@ class UsageError(Exception):
 def add_damping_option(parser):
     """``--damping LAMBDA MU``: the damping rates of vectors-damped (`verify` and `bench`), by default
     those of `pnrotor.integrate_angular_velocity`."""
-    parser.add_argument("--damping", type=float, nargs=2, default=(0.01, 0.01), metavar=("LAMBDA", "MU"),
+    parser.add_argument("--damping", type=_finite, nargs=2, default=(0.01, 0.01), metavar=("LAMBDA", "MU"),
                         help="damping rates of vectors-damped (default: 0.01 0.01)")
+
+
+def _finite(text):
+    """A finite float from the command line (argparse's type), or argparse's one-line error."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    return value
 
 
 def build_parser():
