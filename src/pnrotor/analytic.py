@@ -258,9 +258,12 @@ def _finite(name, value):
 class PrecessingNutatingBinary:
     """The paper's precessing and nutating binary (Sec. V-B, eq:BinaryRotor, eq:precession_constants).
 
-    Parameters (defaults are the paper's): ``Omega_orb`` = 2π/1000, ``Omega_prec`` = 2π/10000,
-    ``alpha`` = π/8, ``alpha_dot`` = 2α/10⁵, ``nu`` = π/80, ``R0`` = exp(−3α x̂/10), ``T`` = 10⁶ (the
-    span of the paper's study: 1000 orbits, 100 precession cycles). ``alpha_dot`` and ``R0`` default
+    Parameters (defaults are the paper's but for R0): ``Omega_orb`` = 2π/1000, ``Omega_prec`` = 2π/10000,
+    ``alpha`` = π/8, ``alpha_dot`` = 2α/10⁵, ``nu`` = π/80, ``R0`` = exp(−3α x̂/20), a rotation by −3α/10
+    about x̂, ``T`` = 10⁶ (the span of the paper's study: 1000 orbits, 100 precession cycles).  The paper
+    writes R₀ = e^{−3α x/10}, which in its own notation (R₁ = e^{Ω t z/2} rotates by Ω t) rotates by −3α/5:
+    this default is half that rotation, as every measurement of this project so far used it (a review of
+    2026-11-27 found it; a constant rotation of the whole binary).  ``alpha_dot`` and ``R0`` default
     to the paper's expressions in the given ``alpha``; ``R0`` may be any nonzero quaternion (w, x, y, z)
     and is normalized (one already unit to rounding is kept as given, since normalizing it again may
     change its last bits); all parameters must be finite and ``T`` > 0. :meth:`describe` gives the
