@@ -859,6 +859,21 @@ def test_unknown_kind_and_mismatched_fields(tmp_path):
         hdf5.read(path)
 
 
+@pytest.mark.parametrize("name, value, message", [
+    ("kind", np.array(["FrameHistory"] * 2, dtype=h5py.string_dtype()), "attribute 'kind' is not a string"),
+    ("pnrotor_strings_crc32", np.array([1, 2], dtype="u4"), "attribute 'pnrotor_strings_crc32' is not a number"),
+])
+def test_array_attributes_are_named(tmp_path, name, value, message):
+    """Stored as arrays (another writer, or damage), they made numpy's "truth value of an array is ambiguous",
+    naming neither the file nor the attribute."""
+    path = hdf5.write(tmp_path / "run.h5", frame_history())
+    with h5py.File(path, "r+") as f:
+        f.attrs[name] = value
+    for call in (hdf5.read, hdf5.list_runs) if name == "kind" else (hdf5.read,):   # list_runs reads no CRC
+        with pytest.raises(ValueError, match=f"run\\.h5: {message}"):
+            call(path)
+
+
 def test_registered_kinds_name_their_dataclasses():
     assert hdf5.KINDS["FrameHistory"] == f"{FrameHistory.__module__}:FrameHistory"
     evolve = pytest.importorskip("pnrotor.pn.evolve", reason="pnrotor.pn.evolve.Evolution is not written yet")

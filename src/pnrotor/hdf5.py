@@ -497,9 +497,13 @@ def _check_metadata(g, where):
     missing = [name for name in _METADATA if name not in g.attrs]
     wrong = [name for name in ("kind", "pnrotor_version", "created") if name in g.attrs
              and not isinstance(g.attrs[name], str)]
+    if _STRINGS_CRC in g.attrs and not isinstance(g.attrs[_STRINGS_CRC], np.integer):
+        wrong.append(_STRINGS_CRC)
     if missing or wrong:
         raise ValueError(f"{where}: " + "; ".join([f"attribute {name!r} is missing" for name in missing]
-                                                 + [f"attribute {name!r} is not a string" for name in wrong]))
+                                                 + [f"attribute {name!r} is not a "
+                                                    + ("number" if name == _STRINGS_CRC else "string")
+                                                    for name in wrong]))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -906,6 +910,8 @@ def _open(path):
 
 
 def _check_schema(g, path):
+    if not isinstance(g.attrs.get("kind", ""), str):   # compared with strings before the run is read
+        raise ValueError(f"{path}: attribute 'kind' is not a string")
     schema = g.attrs.get("pnrotor_schema")
     if schema is None:
         raise ValueError(f"{path} is an HDF5 file but not a pnrotor file (no 'pnrotor_schema' attribute)")
