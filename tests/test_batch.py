@@ -177,6 +177,7 @@ def test_a_run_that_cannot_be_written_fails_its_row_only(table, tmp_path, monkey
         return run
 
     monkeypatch.setattr(batch.backends, "evolve_row", nan_for_b)
+    monkeypatch.setattr(batch.backends, "start_method", lambda: "fork")   # the workers see the patch
     outcome = batch.run(table, tmp_path / "out.h5", jobs=jobs)
     assert [row.name for row in outcome.failed] == ["b", "bad"]
     assert outcome.failed[0].error.startswith("its run cannot be written: cannot write this Evolution: dataset 'v' "
@@ -223,7 +224,8 @@ def test_a_worker_killed_once_loses_no_run(table, tmp_path, monkeypatch):
             os.kill(os.getpid(), signal.SIGKILL)
         return real(params)
 
-    monkeypatch.setattr(batch.backends, "evolve_row", die_once)    # seen by forked workers
+    monkeypatch.setattr(batch.backends, "evolve_row", die_once)
+    monkeypatch.setattr(batch.backends, "start_method", lambda: "fork")   # the workers see the patch
     outcome = batch.run(table, tmp_path / "out.h5", jobs=2)
     assert marker.exists() and [row.name for row in outcome.failed] == ["bad"]
     for name, kw in zip("abc", ROWS):

@@ -340,7 +340,8 @@ def test_batch_rows_with_bad_values_fail_alone(in_tmp, capsys):
             '30,10,"0,0,0","0,0,0",100,often,,\n'
             '30,10,"0,0,0","0,0,0",100,,a/b,\n'
             '30,10,"0,0,0","0,0,0",,,,\n'
-            '30,10,"0,0,0","0,0,0",100,,,3.3\n')
+            '30,10,"0,0,0","0,0,0",100,,,3.3\n'
+            '30,x,"0,0,0","0,0,0",100,,named,\n')
     write_text(in_tmp / "b.csv", text)
     code, out, _ = evolve(capsys, "--batch", "b.csv", "--jobs", "1", "-q")
     assert code == 1 and hdf5.list_runs(in_tmp / "waveforms" / "b.h5") == ["ok"]
@@ -351,6 +352,7 @@ def test_batch_rows_with_bad_values_fail_alone(in_tmp, capsys):
         "  FAILED row 5 (line 6): name 'a/b' is not a valid group name (non-empty, no '/', not '.')",
         "  FAILED row 6 (line 7): f_ref is empty",
         "  FAILED row 7 (line 8) (T4_m30_m10_chi1-0,0,0_chi2-0,0,0_f100_pn3.3): pn_order must be a multiple of 0.5 in [0.0, 4.5], got 3.3",
+        "  FAILED row 8 (line 9) (named): m2 must be a number, got 'x'",   # a bad row keeps its name
     ]
 
 

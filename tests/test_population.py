@@ -40,7 +40,7 @@ GOOD = {
 }
 FAILED = [
     "  FAILED row 6 (line 7) (spin): |chi1| = 2.0 exceeds 1",
-    "  FAILED row 7 (line 8): m1 must be a number, got 'abc'",
+    "  FAILED row 7 (line 8) (cell): m1 must be a number, got 'abc'",
     "  FAILED row 8 (line 9) (both): f_min and f_max are both given: the population mode gives one state per row, "
     "at f_max (forward), at f_min (backward) or at the end of the inspiral; give at most one of them",
     "  FAILED row 9 (line 10) (steps): sampling must be final (or empty) in the population mode, which gives final "

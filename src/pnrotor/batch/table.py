@@ -129,6 +129,8 @@ def read_batch(path, cli_defaults):
             row.params, row.name = _row_parameters(record, cli_defaults)
         except ValueError as error:
             row.error = str(error)
+            if _valid_name(record.get("name")):   # a failure still says which row it is
+                row.name = record["name"]
         rows.append(row)
     seen = {}
     for row in rows:
@@ -221,11 +223,16 @@ def _row_parameters(record, cli_defaults):
     name = record.get("name")
     if name is None:
         name = default_name(params)
-    elif not isinstance(name, str) or name in (".", "") or "/" in name or "\x00" in name:
+    elif not _valid_name(name):
         raise ValueError(f"name {name!r} is not a valid group name (non-empty, no '/', not '.')")
     else:
         default_name(params)  # checks the approximant before the run
     return params, name
+
+
+def _valid_name(name):
+    """Whether a name column's value can name an HDF5 group: a non-empty string, no '/', not '.'."""
+    return isinstance(name, str) and name not in (".", "") and "/" not in name and "\x00" not in name
 
 
 def _float(value, key):
