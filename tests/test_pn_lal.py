@@ -81,6 +81,23 @@ def test_spintaylor_t1_nonspinning(case):
     _check(compare(*CASES[case], "T1"))
 
 
+def test_the_end_at_the_peak_of_omega_dot_is_lals():
+    """T4 at 1PN, nonspinning: v̇ ∝ v⁹(1 + a v²), so ω̇ ∝ v²v̇ peaks at v² = −11/(13a), where LAL stops (code
+    1026, d²ω/dt² ≤ 0, tested between its steps: a little later).  pnrotor ended at the peak of v̇ itself,
+    v² = −9/(11a), 2.04 rad of orbital phase before LAL."""
+    m1, m2, f0 = 20.0, 8.0, 20.0
+    nu = m1 * m2 / (m1 + m2) ** 2
+    a = -1247 / 336 - 35 * nu / 12 + (1.5 + nu / 6)     # Blanchet (2014) Eq. (314) at 1PN, with the 1PN energy
+    end = evolve(m1, m2, (0, 0, 0), (0, 0, 0), f0, approximant="T4", pn_order=1.0, sampling="final")
+    assert end.termination == "vdot_peak" and end.v[-1] == pytest.approx(np.sqrt(-11 / (13 * a)), rel=1e-9)
+    run = evolve(m1, m2, (0, 0, 0), (0, 0, 0), f0, approximant="T4", pn_order=1.0, sampling=DT)
+    V, Phi = (x.data.data for x in ls.SimInspiralSpinTaylorPNEvolveOrbit(
+        DT, m1 * lal.MSUN_SI, m2 * lal.MSUN_SI, f0, 0.0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 0, 0, 0.0, 0.0, 1, 1, 0, 0,
+        2, 0, ls.SpinTaylorT4)[:2])
+    assert 0 <= V.size - len(run) <= 3 and V[-1] >= end.v[-1]
+    assert np.max(np.abs(Phi[:len(run)] - run.Phi)) < 1e-5
+
+
 def test_generic_frame_and_quadrupole_parameter():
     """Tilted ℓ̂, a generic n̂ and neutron-star-like κ = (5, 8) in the 2PN/3PN QM terms."""
     ell = np.array([0.3, -0.4, 0.866])

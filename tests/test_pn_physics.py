@@ -171,9 +171,10 @@ def test_termination_spin_magnitude_event():
 
 
 @pytest.mark.parametrize("approximant", ["T1", "T4", "T5"])
-def test_vdot_peak_event_is_the_v_derivative_of_vdot(approximant):
-    """Event 6 is v⁻⁸ D² ∂v̇/∂v/(32ν/5) at fixed spins and ℓ̂: checked against a central difference of v̇
-    from the right-hand side, for a precessing state and for the aligned (folded) one."""
+def test_vdot_peak_event_is_the_v_derivative_of_omega_dot(approximant):
+    """Event 6 is v⁻¹⁰ D² ∂(v²v̇)/∂v/(32ν/5) at fixed spins and ℓ̂ (ω̇ = 3v²v̇/M, LAL's d²ω/dt² test):
+    checked against a central difference of v²v̇ from the right-hand side, for a precessing state and for
+    the aligned (folded) one."""
     from pnrotor.pn import system
     from pnrotor.pn.series import basis_values, eval_at, kmax_from_orders
     X1, v = 0.7, 0.35
@@ -194,13 +195,13 @@ def test_vdot_peak_event_is_the_v_derivative_of_vdot(approximant):
             s, d = state.copy(), np.empty(state.size)
             s[0] = x
             rhs(0.0, s, p, d)
-            return d[0]
+            return x * x * d[0]
 
         h = 1e-5
         fd = (vdot(v + h) - vdot(v - h)) / (2 * h)
         g = np.empty(system.N_EVENTS)
         events(0.0, state, p, g)
-        expected = fd * eval_at(D, v, bvals) ** 2 / (v ** 8 * p[system.P_VDOT0])
+        expected = fd * eval_at(D, v, bvals) ** 2 / (v ** 10 * p[system.P_VDOT0])
         assert g[system.EV_VDOT_PEAK] == pytest.approx(expected, rel=1e-7)
 
 

@@ -188,37 +188,37 @@ def test_bns_final_sampling_keeps_one_sample():
 
 
 def test_f_ref_past_the_peak_of_vdot_is_a_value_error():
-    """Between the peak of v̇ (v = 0.5797) and the root of T4's flux ratio (v* = 0.6305) v̇ > 0 but falls
-    with v: no inspiral starts there."""
+    """Between the peak of ω̇ ∝ v²v̇ and the root of T4's flux ratio (v* = 0.6305) v̇ > 0 but ω̇ falls with
+    v: no inspiral starts there."""
     e = evolve(30, 10, [0, 0, 0.999], [0, 0, 0.999], 20.0, approximant="T4", sampling="final")
     for f in (e.f_gw[-1] * (1 + 1e-6), e.f_gw[-1] * 1.1):
-        with pytest.raises(ValueError, match="f_ref .* no longer increases"):
+        with pytest.raises(ValueError, match="f_ref .* no longer accelerates"):
             evolve(30, 10, [0, 0, 0.999], [0, 0, 0.999], f, approximant="T4")
 
 
-def _vdot_of_v(v, X1, chi, approximant, orders):
-    """v̇(v) for spins χ ẑ on both bodies, from the numpy series evaluator (not the numba event code)."""
+def _omega_dot_of_v(v, X1, chi, approximant, orders):
+    """v²v̇(v) ∝ ω̇ for spins χ ẑ on both bodies, from the numpy series evaluator (not the numba event code)."""
     from pnrotor.pn.series import basis_values, evaluate, kmax_from_orders
     from pnrotor.pn.system import vdot_series
     N, D, _ = vdot_series(X1, approximant, kmax_from_orders(*orders))
     b = basis_values(chi, chi, chi * chi, chi * chi, chi * chi)
-    return v ** 9 * evaluate(N, v, b) / evaluate(D, v, b)
+    return v ** 11 * evaluate(N, v, b) / evaluate(D, v, b)
 
 
 @pytest.mark.parametrize("integrate_rotor", [False, True])
 def test_t4_ends_at_the_peak_of_vdot_before_a_root_of_its_flux_ratio(integrate_rotor):
     """|χ| = 0.999 aligned, T4: N has a simple root at v* = 0.6305, where v̇ ∝ v* − v and v approaches v*
     only exponentially; before the 'vdot_peak' end the runs gained 27–52 rad there and their final Φ
-    spread by 23 rad over atol 1e-10 … 1e-14.  Now they stop where v̇(v) peaks: at the maximum of an
-    independent numpy evaluation of v̇(v), with a final Φ that agrees across atol (measured 2e-10 rad)."""
+    spread by 23 rad over atol 1e-10 … 1e-14.  Now they stop where ω̇ ∝ v²v̇ peaks (LAL's d²ω/dt² ≤ 0): at
+    the maximum of an independent numpy evaluation of v²v̇(v), with a final Φ that agrees across atol."""
     runs = [evolve(30, 10, [0, 0, 0.999], [0, 0, 0.999], 20.0, approximant="T4", atol=atol, sampling="final",
                    integrate_rotor=integrate_rotor) for atol in (1e-10, 1e-12, 1e-14)]
     assert all(e.termination == "vdot_peak" for e in runs)
     phi = [e.Phi[-1] for e in runs]
     assert max(phi) - min(phi) < 1e-6
     v = np.linspace(0.55, 0.62, 70001)
-    vdot = _vdot_of_v(v, 0.75, 0.999, "T4", (3.5, 3.5, 3.0))
-    v_peak = v[np.argmax(vdot)]
+    omega_dot = _omega_dot_of_v(v, 0.75, 0.999, "T4", (3.5, 3.5, 3.0))
+    v_peak = v[np.argmax(omega_dot)]
     assert v_peak + 1e-6 < 0.6305 and all(abs(e.v[-1] - v_peak) < 2e-6 for e in runs)
 
 

@@ -24,9 +24,9 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 * ``'energy_balance'`` — E′(v) ≥ 0: the binding energy no longer decreases with v;
 * ``'vdot_nonpositive'`` — v̇ ≤ 0; a safety net: where N or D of v̇ = K v⁹N/D falls to zero, event 6
   or the pole guard fires first, so only a change of the spins could end a run here;
-* ``'vdot_peak'`` — ∂v̇/∂v ≤ 0 at the current spins: v̇ stopped increasing with v, so the inspiral no
-  longer accelerates (LALSuite's d²ω/dt² ≤ 0; the well-defined end where T4's flux ratio approaches
-  a root and v would creep towards it forever, :mod:`pnrotor.pn.system` event 6);
+* ``'vdot_peak'`` — ∂(v²v̇)/∂v ≤ 0 at the current spins: the orbital frequency's rate ω̇ = 3v²v̇/M
+  stopped increasing (LALSuite's d²ω/dt² ≤ 0, its code 1026; the well-defined end where T4's flux ratio
+  approaches a root and v would creep towards it forever, :mod:`pnrotor.pn.system` event 6);
 * ``'vdot_divergent'`` — the denominator of v̇ (T5: the re-expanded Ê′/F̂) fell to 1e-3, just before
   the pole where v̇ → ∞ (for T1 the denominator is Ê′ itself and this is reported as
   ``'energy_balance'``);
@@ -59,7 +59,7 @@ TERMINATION_MESSAGES = {
     "v_max": "v reached v_max = 1",
     "energy_balance": "E'(v) >= 0: the PN binding energy stopped decreasing (energy balance breaks down)",
     "vdot_nonpositive": "dv/dt <= 0: the PN energy balance gives no inspiral",
-    "vdot_peak": "d(dv/dt)/dv <= 0: dv/dt stopped increasing with v (the inspiral no longer accelerates)",
+    "vdot_peak": "d2(omega)/dt2 <= 0: the orbital frequency stopped accelerating (LALSuite's code 1026)",
     "vdot_divergent": "dv/dt diverges: the denominator of the approximant's dv/dt reached zero",
     "spin_magnitude": "|chi_i| exceeded 1",
     "nonfinite": "the state or its derivative became non-finite",
@@ -214,7 +214,7 @@ def _check_start(s, kmax, bvals, n0, d0, e0, peak0):
     why = ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
            else "dv/dt <= 0" if not n0 * d0 > 0.0
            else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS
-           else "dv/dt no longer increases with v" if not peak0 > 0.0 else None)
+           else "the orbital frequency no longer accelerates (d2(omega)/dt2 <= 0)" if not peak0 > 0.0 else None)
     if why:
         v_end = _sys.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2)
         raise ValueError(f"f_ref = {s.f_ref} Hz is past the end of the {s.approximant} inspiral: {why} at "
