@@ -500,6 +500,10 @@ def test_lazy_exports():
     from pnrotor.pn.evolve import Evolution, evolve as pn_evolve
 
     assert pnrotor.evolve is pn_evolve and pnrotor.Evolution is Evolution
+    # the README's example writes with pnrotor.hdf5 after `import pnrotor` alone (it raised AttributeError)
+    code = "import pnrotor; print(pnrotor.hdf5.write.__module__, pnrotor.quaternion.__name__)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["pnrotor.hdf5", "pnrotor.quaternion"]
 
 
 def test_modes_written_beside_the_run(in_tmp, capsys):

@@ -83,8 +83,23 @@ def test_bench_rejects_bad_input(tmp_path, capsys):
     for command in ("bench", "verify"):   # bench checked it after ~30 runs, its output folder made
         with pytest.raises(SystemExit) as parsed:
             main([command, "--damping", "nan", "1", "-o", str(tmp_path / "b")])
-        assert parsed.value.code == 2 and "--damping: must be a finite number" in capsys.readouterr().err
+        err = capsys.readouterr().err
+        assert parsed.value.code == 2 and "--damping: must be a finite number" in err and err.count("\n") == 1
         assert not (tmp_path / "b").exists()
+
+
+@pytest.mark.parametrize("args, line", [
+    (["evolve", "--f-ref", "abc"], "pnrotor evolve: error: argument --f-ref: invalid float value: 'abc' "
+                                   "(see pnrotor evolve --help)\n"),
+    (["evolve", "--compression", "bz2"], "pnrotor evolve: error: argument --compression: invalid choice: 'bz2' "
+                                         "(choose from 'gzip', 'lzf') (see pnrotor evolve --help)\n"),
+    (["evolve", "--bogus"], "pnrotor: error: unrecognized arguments: --bogus (see pnrotor --help)\n"),
+])
+def test_parsing_errors_are_one_line(args, line, capsys):
+    """argparse printed its usage block (12 lines) before the error."""
+    with pytest.raises(SystemExit) as parsed:
+        main(args)
+    assert parsed.value.code == 2 and capsys.readouterr().err == line
 
 
 def test_bench_pn_writes_the_work_precision_study(tmp_path, capsys, monkeypatch):

@@ -14,10 +14,16 @@ _EXPORTS = {
 }
 
 
+_SUBMODULES = {"analytic", "batch", "formulations", "hdf5", "ode", "pn", "quaternion", "waveform"}
+"""The subpackages the README uses as ``pnrotor.NAME`` without importing them first."""
+
+
 def __getattr__(name):
     # imported on first use, so that `import pnrotor` (and the CLI's startup) does not load numba
-    if name in _EXPORTS:
-        import importlib
+    import importlib
 
+    if name in _EXPORTS:
         return getattr(importlib.import_module(_EXPORTS[name]), name)
+    if name in _SUBMODULES:
+        return importlib.import_module(f"pnrotor.{name}")
     raise AttributeError(f"module 'pnrotor' has no attribute {name!r}")

@@ -3,7 +3,7 @@
 One module per subcommand (`verify`, `bench`, `evolve`, `inspect`, `plot`), each with
 ``add_parser(subparsers)`` that registers its arguments and sets ``func`` to a ``run(args) -> int``;
 an option several subcommands take is added by one helper here (`add_damping_option`).
-Errors in the user's input (``ValueError``, ``FileNotFoundError``, ``FileExistsError``,
+Errors in the user's input (argparse's, ``ValueError``, ``FileNotFoundError``, ``FileExistsError``,
 ``IsADirectoryError``, or a `UsageError` raised by a subcommand) are printed as one line on stderr with
 exit status 2 and no traceback; other failures of the system (``OSError``: a full disk, a permission) as
 one line with exit status 1; Ctrl-C, SIGTERM and SIGHUP stop a command with exit status 130.
@@ -31,17 +31,25 @@ def add_damping_option(parser):
 
 
 def _finite(text):
-    """A finite float from the command line (argparse's type), or argparse's one-line error."""
+    """A finite float from the command line (argparse's type), or the parser's one-line error."""
     value = float(text)
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
     return value
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, whose errors (an unknown option, a value of the wrong type) are one line on stderr
+    and exit status 2, as every other error of the command line, not the usage block and then the error."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser():
     from pnrotor import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="pnrotor",
         description="Orientation of precessing compact binaries by integrating the rotor (Boyle 2016).",
     )
