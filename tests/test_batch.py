@@ -115,10 +115,7 @@ def test_interrupted_batch_keeps_its_finished_runs_and_resumes(table, tmp_path, 
 
 
 def test_resume_refuses_the_runs_of_another_table(table, tmp_path, monkeypatch):
-    def interrupt(params):
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(batch.backends, "evolve_row", interrupt)
+    interrupt_third_run(monkeypatch)     # two runs kept (an interrupt before any leaves no folder)
     with pytest.raises(KeyboardInterrupt):
         batch.run(table, tmp_path / "out.h5", jobs=1)
     table.write_text(CSV.replace("120,,T5,c", "125,,T5,c"))
@@ -142,6 +139,13 @@ def test_resume_refuses_shifted_rows_and_other_options(table, tmp_path, monkeypa
         options = dict(compression="gzip")
     with pytest.raises(ValueError, match="holds runs of another table, or of other options"):
         batch.run(table, tmp_path / "out.h5", jobs=1, resume=True, **options)
+
+
+def test_resume_without_an_earlier_attempt_runs_the_whole_batch(table, tmp_path):
+    """The parts folder is made (and locked) before the runs kept in it are looked for: finding it without a
+    fingerprint, --resume called a first attempt "runs of another table"."""
+    outcome = batch.run(table, tmp_path / "out.h5", jobs=1, resume=True)
+    assert outcome.written == 3 and sorted(os.listdir(tmp_path)) == ["binaries.csv", "out.h5"]
 
 
 def test_resume_computes_a_damaged_part_again(table, tmp_path, monkeypatch):

@@ -18,7 +18,8 @@ every write and read of it:
   and statistics of `REQUIRED_KEYS`); `write` checks the same before writing, so what it writes reads back.
 * Writes are atomic. The file is built under a temporary name beside the target,
   ``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp``, fsynced (the writeback of each large dataset starts in a background thread
-  while the next is written), then renamed over the target with `os.replace`. Any exception,
+  while the next is written), then published as the target: linked to its name (`os.link`) if it is new, renamed
+  over it (`os.replace`) with overwrite. Any exception,
   Ctrl-C included, removes the temporary file; only a hard kill (SIGKILL, power loss) can leave one,
   and the target is then absent or still the old complete file; the next write of the same target on
   that host removes the temporary files of writers no longer alive.

@@ -1,4 +1,5 @@
-r"""Work–precision of the coupled post-Newtonian system (``pnrotor bench --pn``): pnrotor's DOP853 at atol 1e-6 … 5e-16, LALSuite's
+r"""Work–precision of the coupled post-Newtonian system (``pnrotor bench --pn``): pnrotor's DOP853 at atol 1e-6 … 1e-14
+(1e-15 and 5e-16 for the reference and its check), LALSuite's
 SpinTaylorT4 and scipy's ``solve_ivp`` (DOP853, LSODA) on pnrotor's right-hand side (issue 14 §4).
 
 Cases (``CASES``): an aligned-spin BBH (30 + 30 M☉), a precessing BBH (30 + 10 M☉, χ₁ = (0.6, 0, 0.2),

@@ -158,9 +158,9 @@ class Plan:
         """{row index: Stored} of the runs already in :attr:`parts`, after checking they are this table's."""
         from pnrotor import hdf5
 
-        if not self.parts.is_dir():
-            return {}
         table = self.parts / _TABLE
+        if not table.exists() and not any(self.parts.glob("run-*.h5")):   # nothing kept: a first attempt
+            return {}
         if not table.exists() or table.read_text() != self._fingerprint():
             raise ValueError(f"{self.parts} holds runs of another table, or of other options (modes, compression, "
                              "checksum), or of an older version of them; remove the folder to start the batch afresh")

@@ -296,7 +296,7 @@ def _run_batch(args):
                       modes=_modes_options(args) if args.modes else None)
     if not args.quiet:
         bad = len(plan.rows) - len(plan.tasks)
-        print(f"pnrotor evolve --batch {args.batch}: {len(plan.rows)} binaries"
+        print(f"pnrotor evolve --batch {args.batch}: {_binaries(len(plan.rows))}"
               + (f" ({bad} with bad values)" if bad else "") + f", on {plan.where}"
               + ("; with their modes (groups NAME and NAME.modes)" if args.modes else ""))
     _warn_if_cold(here=plan.where == "this process")
@@ -304,6 +304,10 @@ def _run_batch(args):
     if not args.quiet:
         print("\n".join(_batch_line(plan.rows[i], outcome.briefs[i]) for i in sorted(outcome.briefs)))
     return _totals(outcome, path, start, "run", "runs")
+
+
+def _binaries(n):
+    return f"{n} binar{'y' if n == 1 else 'ies'}"
 
 
 def _run_population(args, start):
@@ -323,7 +327,7 @@ def _run_population(args, start):
     if not args.quiet:
         bad = sum(row.error is not None for row in plan.rows)
         groups = len(plan.groups)
-        print(f"pnrotor evolve --batch {args.batch} --population: {len(plan.rows)} binaries"
+        print(f"pnrotor evolve --batch {args.batch} --population: {_binaries(len(plan.rows))}"
               + (f" ({bad} with bad values)" if bad else "")
               + f", final states by evolve_many in {groups} call{'s' * (groups != 1)}")
     _warn_if_cold(population=True)
