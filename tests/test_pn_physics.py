@@ -240,6 +240,15 @@ def test_invalid_inputs():
         evolve(10, 10, [0, 0, 0], [0, 0, 0], 2000.0)           # beyond the end of the T4 inspiral
 
 
+@pytest.mark.parametrize("atol", [1e-6, 1e-10])
+def test_maximal_spins_are_not_ended_by_the_tolerance(atol):
+    """|χᵢ| = 1 is allowed and conserved by the equations; the integration's drift of a few atol made a fixed
+    1e-10 margin end such runs as 'spin_magnitude' (at atol 1e-6 forward at 21 Hz instead of 197 Hz)."""
+    run = evolve(30.0, 10.0, (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), 20.0, f_min=10.0, atol=atol)
+    assert run.termination == "energy_balance" and run.stats["termination_backward"] == "f_min"
+    assert run.f_gw[-1] > 190.0
+
+
 @pytest.mark.parametrize("approximant, atol, sampling", [("T1", 1e-3, "steps"), ("T4", 1000.0, "steps"),
                                                         ("T4", 1000.0, 1 / 4096)])
 def test_loose_tolerances_never_give_non_finite_samples(approximant, atol, sampling):

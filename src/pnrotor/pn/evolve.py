@@ -30,7 +30,8 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 * ``'vdot_divergent'`` — the denominator of v̇ (T5: the re-expanded Ê′/F̂) fell to 1e-3, just before
   the pole where v̇ → ∞ (for T1 the denominator is Ê′ itself and this is reported as
   ``'energy_balance'``);
-* ``'spin_magnitude'`` — |χᵢ| exceeded 1 (by more than 1e-10 in |χ|²);
+* ``'spin_magnitude'`` — |χᵢ|² exceeded 1 by more than 1000 (atol + rtol), at least 1e-10: far more than the
+  integration's drift (:func:`pnrotor.pn.system.spin_tolerance`);
 * ``'nonfinite'``, ``'max_steps'``, ``'step_underflow'`` — integrator failures;
 * ``'time_limit'`` — the generous time bound (4τ_N + 10⁴ M forward) was reached (should not happen);
 * ``'not_integrated'`` — backward half only, when no f_min was given.
@@ -181,7 +182,8 @@ def build_system(s, parts=None):
                          x1 * x1 + y1 * y1 + z1 * z1, x2 * x2 + y2 * y2 + z2 * z2)
     p, at_v0 = _sys.make_parameters(
         s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
-        kappa2=s.kappa2, v_end=s.v_max, rotor=s.rotor, phase_shift=s.precession_phase_shift,
+        kappa2=s.kappa2, v_end=s.v_max, spin_tol=_sys.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
+        phase_shift=s.precession_phase_shift,
         aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
         parts=parts)
     _check_start(s, kmax, bvals, *at_v0)

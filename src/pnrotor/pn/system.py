@@ -58,7 +58,7 @@ It exists to measure the difference between the two conventions (tests); it must
 Events (all terminal), filled by :func:`events_precessing` / :func:`events_aligned`:
   0: v − v_end (requested end frequency, or v_max);   1: Ê′ (E′ = −νvÊ′ ≥ 0 ⇔ Ê′ ≤ 0);
   2: N·D (sign of v̇; a safety net: where N falls to zero event 6 fires first, where D does event 5,
-     so only the spins' evolution can bring v̇ to zero);   3, 4: (1 + SPIN_TOL) − |χᵢ|²;
+     so only the spins' evolution can bring v̇ to zero);   3, 4: (1 + spin_tolerance) − |χᵢ|²;
   5: D − DEN_EPS: the denominator of v̇ (Ê′ for T1, the re-expanded Ê′/F̂ for T5; 1 for T4) about to
      vanish.  v̇ = K/D has a pole there with v* − v ∝ √(t* − t), which no step can cross; stopping at
      D = DEN_EPS = 1e-3 leaves t* − t ≈ DEN_EPS²/(2K|dD/dv|) ~ 1e-4 M (a phase of ~1e-5 rad) and
@@ -136,6 +136,15 @@ P_SIZE = P_EP + SERIES_SLOTS
 
 SPIN_TOL = 1e-10
 DEN_EPS = 1e-3
+
+
+def spin_tolerance(atol, rtol):
+    """How far |χᵢ|² may exceed 1 before events 3/4 end a run: 1000 (atol + rtol), at least SPIN_TOL.  The
+    equations conserve |χᵢ|; the integration lets it drift by a few atol (measured: 4–12 atol with the
+    co-precessing rotor, 0.3–0.6 with the orbital one, maximal spins 30 + 10 M☉ from 10 Hz to the end, atol
+    1e-12 … 1e-6), which with a fixed 1e-10 ended such runs as 'spin_magnitude' from atol 1e-10 up (at
+    1e-6, at 21 Hz instead of 197): only a real failure ends a run here, not the requested tolerance."""
+    return max(SPIN_TOL, 1e3 * (atol + rtol))
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -443,7 +452,7 @@ def _store_series(N, D, Ep, basis, fold, p, v0):
 
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
-                    rotor="coprecessing", phase_shift=False, aligned_basis=None,
+                    spin_tol=SPIN_TOL, rotor="coprecessing", phase_shift=False, aligned_basis=None,
                     omega_l="torque", basis=None, v_check=None, parts=None):
     """Build the parameter vector p.
 
@@ -452,7 +461,8 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     precessing one.
     With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′, event 6) at
     v_check) instead of p, for checking the initial point.
-    Everything but v_end and the stored series is ``parts``, this binary's row of :func:`spin_independent_parts`
+    ``spin_tol``: how far |χᵢ|² may exceed 1 before events 3/4 end the run (:func:`spin_tolerance`).
+    Everything but v_end, spin_tol and the stored series is ``parts``, this binary's row of :func:`spin_independent_parts`
     (for a population, built for all its binaries at once), or by default from :func:`_spin_independent_parts`
     (cached).
     """
@@ -464,6 +474,7 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     p = np.zeros(P_SIZE)
     p[:P_NUM] = head
     p[P_VEND] = v_end
+    p[P_SPINTOL] = spin_tol
     fold = aligned_basis is not None
     b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
     at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
@@ -538,7 +549,6 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     L2, L4 = angular_momentum_coefficients(nu)
     p[P_L2] = L2 if inc["so_nlo"] else 0.0
     p[P_L4] = L4 if inc["so_nnlo"] else 0.0
-    p[P_SPINTOL] = SPIN_TOL
     p[P_DEN_EPS] = DEN_EPS
     E, F = energy_series(X1, kappa1, kappa2), flux_series(X1, kappa1, kappa2)
     kmax, approx = np.array(kmax, dtype=np.int64), APPROXIMANTS.index(approximant)
