@@ -141,6 +141,16 @@ def test_resume_refuses_shifted_rows_and_other_options(table, tmp_path, monkeypa
         batch.run(table, tmp_path / "out.h5", jobs=1, resume=True, **options)
 
 
+def test_an_interrupt_before_any_run_keeps_nothing_and_says_so(table, tmp_path, monkeypatch):
+    def interrupt(params):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(batch.backends, "evolve_row", interrupt)
+    with pytest.raises(KeyboardInterrupt, match="^no run had finished; nothing kept$"):
+        batch.run(table, tmp_path / "out.h5", jobs=1)
+    assert os.listdir(tmp_path) == ["binaries.csv"]
+
+
 def test_resume_without_an_earlier_attempt_runs_the_whole_batch(table, tmp_path):
     """The parts folder is made (and locked) before the runs kept in it are looked for: finding it without a
     fingerprint, --resume called a first attempt "runs of another table"."""
@@ -204,7 +214,12 @@ def test_a_second_batch_on_the_same_output_fails_at_once(table, tmp_path, monkey
                 second.run()
         return real(params)
 
-    monkeypatch.setattr(batch.backends, "evolve_row", run_second_meanwhile)
+    def plan_meanwhile(params):
+        with pytest.raises(FileExistsError, match="another batch is writing"):   # not "remove the folder"
+            batch.plan(table, tmp_path / "out.h5", jobs=1)
+        return run_second_meanwhile(params)
+
+    monkeypatch.setattr(batch.backends, "evolve_row", plan_meanwhile)
     outcome = first.run()
     assert outcome.written == 3 and sorted(os.listdir(tmp_path)) == ["binaries.csv", "out.h5"]
     (tmp_path / "p.parts").mkdir()   # and the lock is an flock: held by another open file, it refuses too
@@ -234,6 +249,25 @@ def test_a_worker_killed_once_loses_no_run(table, tmp_path, monkeypatch):
     assert marker.exists() and [row.name for row in outcome.failed] == ["bad"]
     for name, kw in zip("abc", ROWS):
         assert_same_run(hdf5.read(tmp_path / "out.h5", name), pnrotor.evolve(**kw))
+
+
+def test_a_row_that_kills_its_worker_every_time_fails_alone(table, tmp_path, monkeypatch):
+    """Every row unfinished when a pool broke a second time failed with it (bystanders too)."""
+    import signal
+
+    real = batch.backends.evolve_row
+
+    def poison_b(params):
+        if params["m1"] == 20.0:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return real(params)
+
+    monkeypatch.setattr(batch.backends, "evolve_row", poison_b)
+    monkeypatch.setattr(batch.backends, "start_method", lambda: "fork")   # the workers see the patch
+    outcome = batch.run(table, tmp_path / "out.h5", jobs=2)
+    assert sorted(row.name for row in outcome.failed) == ["b", "bad"]
+    assert "its worker process died running it" in next(row for row in outcome.failed if row.name == "b").error
+    assert sorted(hdf5.list_runs(tmp_path / "out.h5")) == ["a", "c"]
 
 
 def test_run_restores_the_callers_ctrl_c_handler(table, tmp_path):

@@ -94,6 +94,8 @@ def test_bench_rejects_bad_input(tmp_path, capsys):
     (["evolve", "--compression", "bz2"], "pnrotor evolve: error: argument --compression: invalid choice: 'bz2' "
                                          "(choose from 'gzip', 'lzf') (see pnrotor evolve --help)\n"),
     (["evolve", "--bogus"], "pnrotor: error: unrecognized arguments: --bogus (see pnrotor --help)\n"),
+    (["verify", "--damping", "abc", "1"], "pnrotor verify: error: argument --damping: must be a finite number, "
+                                          "got 'abc' (see pnrotor verify --help)\n"),
 ])
 def test_parsing_errors_are_one_line(args, line, capsys):
     """argparse printed its usage block (12 lines) before the error."""

@@ -188,12 +188,17 @@ def test_samples_after_the_start_keep_the_sign_of_the_solution(formulation, t_ev
     (dict(omega=lambda t: [1.0, 2.0]), "three finite floats"),
     (dict(formulation="vectors-damped", damping=(math.nan, 1.0)), "damping"),
     (dict(atol=np.full(4, 1e-10)), "atol and rtol must be numbers"),   # ran, then failed as a TypeError
-    (dict(rtol="0"), "atol and rtol must be numbers"),
+    (dict(rtol="0"), "atol and rtol must be numbers"), (dict(atol=True), "atol and rtol must be numbers"),
 ])
 def test_invalid_input(kwargs, match):
     args = dict(omega=BINARY, t_span=(0, 10.0), R0=R0) | kwargs
     with pytest.raises(ValueError, match=match):
         integrate_angular_velocity(**args)
+
+
+def test_zero_dimensional_tolerances_are_numbers():
+    h = integrate_angular_velocity(BINARY, (0, 10.0), R0, atol=np.array(1e-10), rtol=np.float32(0))
+    assert h.status == 0 and h.atol == 1e-10
 
 
 def test_non_callable_omega():

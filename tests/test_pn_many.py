@@ -209,6 +209,8 @@ def test_targets_and_binaries_evolve_refuses_are_refused_alone():
     ({"frequencies": [30.0], "f_end": 30.0}, "not both"),
     ({"frequencies": np.ones((3, 2)) * 30}, r"frequencies must have shape \(K,\) or \(N, K\)"),
     ({"frequencies": []}, "K >= 1"),
+    ({"frequencies": [30.0, "abc"]}, "frequencies must be numbers"), ({"frequencies": [True]}, "frequencies must be"),
+    ({"frequencies": [[30.0], [30.0, 40.0]]}, "frequencies must be numbers"),
 ])
 def test_bad_frequency_lists_raise(kwargs, match):
     with pytest.raises(ValueError, match=match):

@@ -264,7 +264,7 @@ class PrecessingNutatingBinary:
     writes R₀ = e^{−3α x/10}, which in its own notation (R₁ = e^{Ω t z/2} rotates by Ω t) rotates by −3α/5:
     this default is half that rotation, as every measurement of this project so far used it (a review of
     2026-11-27 found it; a constant rotation of the whole binary).  ``alpha_dot`` and ``R0`` default
-    to the paper's expressions in the given ``alpha``; ``R0`` may be any nonzero quaternion (w, x, y, z)
+    to these expressions in the given ``alpha``; ``R0`` may be any nonzero quaternion (w, x, y, z)
     and is normalized (one already unit to rounding is kept as given, since normalizing it again may
     change its last bits); all parameters must be finite and ``T`` > 0. :meth:`describe` gives the
     parameters as a run's ``inputs``, and :meth:`from_inputs` rebuilds the binary from them.

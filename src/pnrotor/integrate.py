@@ -8,7 +8,6 @@ and returns the unit, sign-continuous rotors with the integrator's statistics as
 """
 
 import math
-import numbers
 import time
 
 import numpy as np
@@ -111,7 +110,8 @@ def integrate_angular_velocity(omega, t_span, R0, formulation="rotor", method="D
     Returns
     -------
     FrameHistory
-        ``t``, unit sign-continuous rotors ``R`` (N, 4) with R[0]·R0 > 0, the integrator's statistics,
+        ``t``, unit rotors ``R`` (N, 4), sign-continuous from R0 at t0 (the solution's sign, also at samples
+        that do not start at t0), the integrator's statistics,
         ``n_resets`` (generator resets, eq:generator_reset), ``status``/``message`` (0 = reached t_end),
         ``wall_time`` of the integration proper, and the inputs.
 
@@ -123,7 +123,7 @@ def integrate_angular_velocity(omega, t_span, R0, formulation="rotor", method="D
     """
     form = formulations.get(formulation)
     method = method_name(method)
-    if not all(isinstance(x, numbers.Real) and not isinstance(x, bool) for x in (atol, rtol)):
+    if not all(np.ndim(x) == 0 and np.asarray(x).dtype.kind in "iuf" for x in (atol, rtol)):
         raise ValueError(f"atol and rtol must be numbers (one tolerance for every state component), got "
                          f"atol = {atol!r}, rtol = {rtol!r}")
     try:

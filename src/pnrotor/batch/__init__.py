@@ -89,7 +89,10 @@ class Plan:
         (module docstring) → :class:`Outcome`; ``progress`` shows a tqdm bar on stderr."""
         start = time.perf_counter()
         with self._claimed():
-            return self._run(start, progress)
+            outcome = self._run(start, progress)
+        if self.parts.exists():   # once its lock file is closed (Windows cannot remove an open file)
+            shutil.rmtree(self.parts)
+        return outcome
 
     def _run(self, start, progress):
         done = self._stored() if self.resume else {}
@@ -116,6 +119,8 @@ class Plan:
                     bar.update()
         except KeyboardInterrupt:
             kept = len(list(self.parts.glob("run-*.h5")))   # the workers' too, not only those reported yet
+            if not kept:   # (and the folder goes)
+                raise KeyboardInterrupt("no run had finished; nothing kept") from None
             raise KeyboardInterrupt(f"{kept} finished run{'s' * (kept != 1)} kept in {self.parts}; "
                                     "complete the batch with --resume (resume=True)") from None
         finally:
@@ -127,7 +132,7 @@ class Plan:
                        evolve_seconds)
 
     def _assemble(self, done):
-        """The batch file from the finished runs, in row order; then the parts folder goes."""
+        """The batch file from the finished runs, in row order (:meth:`run` then removes the parts folder)."""
         if done:
             from pnrotor import hdf5
 
@@ -141,8 +146,6 @@ class Plan:
                                           self.rows[index].name + backends.MODES_SUFFIX)
             finally:
                 interrupted.restore()
-        if self.parts.exists():
-            shutil.rmtree(self.parts)
         return len(done)
 
     def _fingerprint(self):
@@ -217,6 +220,23 @@ _LOCK = "lock"
 """In the parts folder: the file a running batch holds its exclusive lock on (``flock``)."""
 
 
+def _locked(parts):
+    """Whether a running batch holds the lock of the parts folder ``parts`` (never, where there is no flock)."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        return False
+    lock = parts / _LOCK
+    if not lock.exists():
+        return False
+    with open(lock, "a") as held:
+        try:
+            fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return True
+    return False
+
+
 def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compression=None, checksum=True,
          defaults=None, create_folder=False, resume=False, modes=None):
     """Check a batch before it runs → :class:`Plan`.
@@ -242,12 +262,15 @@ def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compressi
         from pnrotor.waveform.modes import check_arguments
 
         wave = check_arguments(*modes)
-        clash = [row.name for row in rows if row.name.endswith(backends.MODES_SUFFIX)]
+        clash = [row.name for row in rows if row.name is not None and row.name.endswith(backends.MODES_SUFFIX)]
         if clash:
             raise ValueError(f"with modes, run names may not end in {backends.MODES_SUFFIX!r} (the modes' groups "
                              f"do): {', '.join(clash)}")
     result = Plan(rows, path, jobs, scheduler, overwrite, dict(compression=compression, checksum=checksum),
                   create_folder, bool(resume), wave)
+    if result.parts.exists() and _locked(result.parts):
+        raise FileExistsError(f"another batch is writing {result.path} (its runs are in {result.parts}); wait "
+                              "for it to finish")
     if result.parts.exists() and not resume:
         raise FileExistsError(f"{result.parts} holds the finished runs of an interrupted batch: pass --resume "
                               "(resume=True) to complete it, or remove the folder")

@@ -176,9 +176,10 @@ def results_pool(tasks, jobs, context=None, chunksize=None, parts=None, storage=
         # the server dies with this process (and its workers with it), then loads the PN code once
         mp_context.set_forkserver_preload(["pnrotor.batch.forkserver", "pnrotor.pn.evolve"])
 
-    def start(chunks):
-        """A pool on `chunks` → (pool, {future: chunk}, chunks not submitted because a worker died at once)."""
-        pool = ProcessPoolExecutor(max_workers=min(jobs, len(chunks)), mp_context=mp_context, initializer=_preload)
+    def start(chunks, workers):
+        """A pool of `workers` processes on `chunks` → (pool, {future: chunk} in submission order, chunks not
+        submitted because a worker died at once)."""
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=mp_context, initializer=_preload)
         futures = {}
         try:
             for chunk in chunks:
@@ -193,7 +194,7 @@ def results_pool(tasks, jobs, context=None, chunksize=None, parts=None, storage=
             raise
         return pool, futures, chunks[len(futures):]
 
-    return _pool_results(start, start(chunks))
+    return _pool_results(start, start(chunks, jobs), jobs)
 
 
 def _stop(pool):
@@ -203,24 +204,28 @@ def _stop(pool):
     pool.shutdown(wait=True)
 
 
-def _pool_results(start, first):
-    """(index, ok, result) of every row of the pool `first` (:func:`results_pool`'s ``start``, already called).
-    A worker that dies (killed, out of memory) breaks its whole pool, and with it every chunk not finished:
-    those go to a new pool once, and fail only if a worker dies there too (a row that kills its worker every
-    time)."""
+def _pool_results(start, first, jobs):
+    """(index, ok, result) of every row of the pool `first` (:func:`results_pool`'s ``start(chunks, jobs)``,
+    already called).  A worker that dies (killed, out of memory) breaks its whole pool, and with it every chunk
+    not finished: those rows go to a new pool, one per task, as long as each pool finishes some row; a pool
+    that finishes none is followed by one of a single worker, and when that one too finishes none, its first
+    row (the one it was running) fails and the others go on.  So a row that kills its worker every time fails
+    alone."""
     from concurrent.futures import as_completed
     from concurrent.futures.process import BrokenProcessPool
 
-    for retry in (False, True):
-        pool, futures, lost = start(lost) if retry else first
-        completed = False
+    state, workers = first, jobs
+    while True:
+        pool, futures, unsubmitted = state
+        broken, finished, completed = set(), False, False
         try:
             for future in as_completed(futures):
                 try:
                     results = future.result()
                 except BrokenProcessPool:
-                    lost.append(futures[future])
+                    broken.add(future)
                     continue
+                finished = True
                 yield from results
             completed = True
         finally:
@@ -228,10 +233,17 @@ def _pool_results(start, first):
                 pool.shutdown(wait=True)
             else:
                 _stop(pool)
+        lost = [task for future, chunk in futures.items() if future in broken for task in chunk]
+        lost += [task for chunk in unsubmitted for task in chunk]
         if not lost:
             return
-    for chunk in lost:
-        yield from ((index, False, "its worker process died, twice (killed, or out of memory?)") for index, _ in chunk)
+        if workers == 1 and not finished:
+            index, _ = lost.pop(0)
+            yield index, False, "its worker process died running it (killed, or out of memory?)"
+            if not lost:
+                return
+        workers = jobs if finished else 1
+        state = start([[task] for task in lost], workers)
 
 
 def results_dask(tasks, address):

@@ -134,7 +134,7 @@ def read_batch(path, cli_defaults):
         rows.append(row)
     seen = {}
     for row in rows:
-        if row.name is not None:
+        if row.name is not None and row.error is None:   # a failed row keeps its name for its FAILED line only
             if row.name in seen:
                 raise ValueError(f"batch file {path}: {seen[row.name].label} and {row.label} have the same name "
                                  f"{row.name!r}; give each a distinct name column")

@@ -32,7 +32,10 @@ def add_damping_option(parser):
 
 def _finite(text):
     """A finite float from the command line (argparse's type), or the parser's one-line error."""
-    value = float(text)
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
     return value

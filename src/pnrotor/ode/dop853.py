@@ -694,6 +694,10 @@ def _dop853_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_st
                 nrej += 1
                 ivals[IV_NANREJ] = 1
                 h_abs = abs(h) * min_factor
+                if h_abs < min_step:
+                    status = STATUS_STEP_UNDERFLOW
+                    fvals[FV_TFAIL] = t
+                    break
                 continue
         if want_dense:
             seg_t, seg_h, seg_c, nseg = _append_segment(seg_t, seg_h, seg_c, nseg, t, h, rc)

@@ -30,8 +30,8 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 * ``'vdot_divergent'`` — the denominator of v̇ (T5: the re-expanded Ê′/F̂) fell to 1e-3, just before
   the pole where v̇ → ∞ (for T1 the denominator is Ê′ itself and this is reported as
   ``'energy_balance'``);
-* ``'spin_magnitude'`` — |χᵢ|² exceeded 1 by more than 1000 (atol + rtol), at least 1e-10: far more than the
-  integration's drift (:func:`pnrotor.pn.system.spin_tolerance`);
+* ``'spin_magnitude'`` — |χᵢ|² exceeded 1 by more than 1000 (atol + rtol), at least 1e-10 and at most 1e-3:
+  far more than the integration's drift (:func:`pnrotor.pn.system.spin_tolerance`);
 * ``'nonfinite'``, ``'max_steps'``, ``'step_underflow'`` — integrator failures;
 * ``'time_limit'`` — the generous time bound (4τ_N + 10⁴ M forward) was reached (should not happen);
 * ``'not_integrated'`` — backward half only, when no f_min was given.

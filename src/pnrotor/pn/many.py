@@ -212,12 +212,18 @@ def _target_table(f_end, frequencies, n):
         return _per_binary(np.nan if f_end is None else f_end, n, "f_end")[:, None], False
     if f_end is not None:
         raise ValueError("give f_end (one state per binary) or frequencies (a list of them), not both")
-    f = np.asarray(frequencies, dtype=np.float64)
+    try:
+        if _has_bool(frequencies):
+            raise TypeError
+        f = np.asarray(frequencies, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"frequencies must be numbers (not booleans or text) of shape (K,) or (N, K), N = {n} "
+                         "binaries") from None
     if f.ndim == 1:
         f = np.broadcast_to(f, (n, f.size))
     if f.ndim != 2 or f.shape[0] != n or f.shape[1] == 0:
         raise ValueError(f"frequencies must have shape (K,) or (N, K) with K >= 1 and N = {n} binaries, "
-                         f"got {np.shape(frequencies)}")
+                         f"got {f.shape}")
     return np.ascontiguousarray(f), True
 
 

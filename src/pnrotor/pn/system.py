@@ -139,12 +139,13 @@ DEN_EPS = 1e-3
 
 
 def spin_tolerance(atol, rtol):
-    """How far |χᵢ|² may exceed 1 before events 3/4 end a run: 1000 (atol + rtol), at least SPIN_TOL.  The
+    """How far |χᵢ|² may exceed 1 before events 3/4 end a run: 1000 (atol + rtol), at least SPIN_TOL and at
+    most 1e-3 (a drift of that size is a failed integration whatever was asked).  The
     equations conserve |χᵢ|; the integration lets it drift by a few atol (measured: 4–12 atol with the
     co-precessing rotor, 0.3–0.6 with the orbital one, maximal spins 30 + 10 M☉ from 10 Hz to the end, atol
     1e-12 … 1e-6), which with a fixed 1e-10 ended such runs as 'spin_magnitude' from atol 1e-10 up (at
     1e-6, at 21 Hz instead of 197): only a real failure ends a run here, not the requested tolerance."""
-    return max(SPIN_TOL, 1e3 * (atol + rtol))
+    return min(1e-3, max(SPIN_TOL, 1e3 * (atol + rtol)))
 
 
 # ---------------------------------------------------------------------------------------------------
