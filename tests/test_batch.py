@@ -141,6 +141,14 @@ def test_resume_refuses_shifted_rows_and_other_options(table, tmp_path, monkeypa
         batch.run(table, tmp_path / "out.h5", jobs=1, resume=True, **options)
 
 
+def test_modes_with_an_unnamed_row_that_failed_its_checks(tmp_path):
+    """plan(modes=…) read every row's name (None for this one): an AttributeError traceback."""
+    path = tmp_path / "t.csv"
+    path.write_text('m1,m2,chi1,chi2,f_ref\n30,10,"0,0,0","0,0,0",100\nabc,10,"0,0,0","0,0,0",100\n')
+    plan = batch.plan(path, tmp_path / "out.h5", jobs=1, modes=(4, 1.5, None))
+    assert [row.error is None for row in plan.rows] == [True, False] and len(plan.tasks) == 1
+
+
 def test_an_interrupt_before_any_run_keeps_nothing_and_says_so(table, tmp_path, monkeypatch):
     def interrupt(params):
         raise KeyboardInterrupt
