@@ -176,17 +176,22 @@ def _per_binary(x, n, name, shape=()):
     """x broadcast to (n,) + shape as float64, or a ValueError naming the parameter (booleans refused, as
     ``evolve`` refuses them)."""
     want = "(N,) or a scalar" if not shape else f"(N, {shape[0]}) or ({shape[0]},)"
-    try:
-        if _has_bool(x):
-            raise TypeError
-        a = np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers (not booleans or text) of shape {want} with N = {n} "
-                         f"binaries") from None
+    a = _numbers(x, name, f"{want} with N = {n} binaries")
     try:
         return np.ascontiguousarray(np.broadcast_to(a, (n,) + shape))
     except ValueError:
         raise ValueError(f"{name} must have shape {want} with N = {n} binaries, got {a.shape}") from None
+
+
+def _numbers(x, name, shape):
+    """x as a float64 array, or a ValueError naming it and the ``shape`` expected: booleans are refused, as
+    ``evolve`` refuses them, and so are text and ragged sequences."""
+    try:
+        if _has_bool(x):
+            raise TypeError
+        return np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be numbers (not booleans or text) of shape {shape}") from None
 
 
 def _has_bool(x):
@@ -212,13 +217,7 @@ def _target_table(f_end, frequencies, n):
         return _per_binary(np.nan if f_end is None else f_end, n, "f_end")[:, None], False
     if f_end is not None:
         raise ValueError("give f_end (one state per binary) or frequencies (a list of them), not both")
-    try:
-        if _has_bool(frequencies):
-            raise TypeError
-        f = np.asarray(frequencies, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"frequencies must be numbers (not booleans or text) of shape (K,) or (N, K), N = {n} "
-                         "binaries") from None
+    f = _numbers(frequencies, "frequencies", f"(K,) or (N, K) with N = {n} binaries")
     if f.ndim == 1:
         f = np.broadcast_to(f, (n, f.size))
     if f.ndim != 2 or f.shape[0] != n or f.shape[1] == 0:
