@@ -194,17 +194,10 @@ class Plan:
         self.parts.mkdir(exist_ok=True)
         try:
             with open(self.parts / _LOCK, "a") as lock:
-                try:
-                    import fcntl
-                except ImportError:  # pragma: no cover - not POSIX: no lock
-                    fcntl = None
-                if fcntl is not None:
-                    try:
-                        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                    except BlockingIOError:
-                        made = False
-                        raise FileExistsError(f"another batch is writing {self.path} (its runs are in {self.parts})"
-                                              "; wait for it to finish") from None
+                if not _flock(lock):
+                    made = False
+                    raise FileExistsError(f"another batch is writing {self.path} (its runs are in {self.parts}); "
+                                          "wait for it to finish")
                 yield
         except BaseException:
             if made and self.parts.is_dir() and not any(self.parts.glob("run-*.h5")):
@@ -220,21 +213,26 @@ _LOCK = "lock"
 """In the parts folder: the file a running batch holds its exclusive lock on (``flock``)."""
 
 
-def _locked(parts):
-    """Whether a running batch holds the lock of the parts folder ``parts`` (never, where there is no flock)."""
+def _flock(file):
+    """Take the exclusive lock of the open ``file`` without waiting → False if another process holds it (True
+    where there is no flock: no lock there)."""
     try:
         import fcntl
     except ImportError:  # pragma: no cover - not POSIX
+        return True
+    try:
+        fcntl.flock(file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
         return False
-    lock = parts / _LOCK
-    if not lock.exists():
+    return True
+
+
+def _locked(parts):
+    """Whether a running batch holds the lock of the parts folder ``parts``."""
+    if not (parts / _LOCK).exists():
         return False
-    with open(lock, "a") as held:
-        try:
-            fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            return True
-    return False
+    with open(parts / _LOCK, "a") as held:
+        return not _flock(held)
 
 
 def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compression=None, checksum=True,
