@@ -134,7 +134,9 @@ def qlog(q):
     """Generator r (float64[3]) of the normalized rotor q/|q|: q/|q| = exp(r), |r| ∈ [0, π].
 
     |r| = atan2(|vector part|, scalar part), accurate near 0 and π. For a vector part exactly zero and
-    a negative scalar part (the rotor −1), the axis is arbitrary and (π, 0, 0) is returned.
+    a negative scalar part (the rotor −1), the axis is arbitrary and (π, 0, 0) is returned.  The vector
+    part's squared norm must be a normal float: |vector part| in (1e-150, 1e150) (beyond, it overflows or
+    underflows and the result is wrong; a review of 2026-11-27 found (0, 0, 0) for a norm of 1e155).
     """
     vn = np.sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     out = np.zeros(3)
@@ -213,7 +215,8 @@ def qfrom_matrix(M):
 
 @njit(cache=True)
 def qframe_error(Ra, Re):
-    """Frame error norm δ = √Σᵢ |eᵢ − aᵢ|² (eq:error_norm) between rotors Ra and Re (any nonzero norms)."""
+    """Frame error norm δ = √Σᵢ |eᵢ − aᵢ|² (eq:error_norm) between rotors Ra and Re of any norm in (1e-150, 1e150)
+    (:func:`qrotate`'s range: beyond it the squared norm is not a normal float and the result is not finite)."""
     total = 0.0
     f = np.zeros(3)
     for i in range(3):
@@ -284,7 +287,8 @@ def normalize(q, out):
 
 @_gufunc(["void(float64[:], float64[:], float64[:])"], "(n),(m)->(m)")
 def rotate(R, v, out):
-    """R v R⁻¹ for rotors (..., 4), any nonzero norm, and vectors (..., 3) (eq:rotor-rotation)."""
+    """R v R⁻¹ for rotors (..., 4) of any norm in (1e-150, 1e150) (:func:`qrotate`) and vectors (..., 3)
+    (eq:rotor-rotation)."""
     out[:] = qrotate(R, v)
 
 
@@ -304,7 +308,8 @@ def _log(q, dummy, out):
 
 
 def log(q):
-    """Generators (..., 3) of the normalized rotors q/|q| (..., 4), with |r| ∈ [0, π]."""
+    """Generators (..., 3) of the normalized rotors q/|q| (..., 4), with |r| ∈ [0, π], for norms in (1e-150, 1e150)
+    (:func:`qlog`)."""
     return _log(np.asarray(q, dtype=np.float64), np.empty(3))
 
 
@@ -314,7 +319,8 @@ def _to_matrix(R, dummy, out):
 
 
 def to_matrix(R):
-    """Rotation matrices (..., 3, 3) of rotors (..., 4) of any nonzero norm."""
+    """Rotation matrices (..., 3, 3) of rotors (..., 4) of any norm in (1e-150, 1e150) (the squared norm must be a
+    normal float)."""
     return _to_matrix(np.asarray(R, dtype=np.float64), np.empty((3, 3)))
 
 
