@@ -14,6 +14,7 @@ on this path, and never in the numba code.
 """
 
 import math
+import numbers
 import sys
 
 import numpy as np
@@ -23,6 +24,16 @@ MTSUN_SI = 4.9254909476412675e-06
 
 _BOOLS = (bool, np.bool_)
 """Refused where a number is expected (float(True) would be 1.0)."""
+
+
+def _real(x):
+    """Whether x is a real number (Python's or numpy's), not a bool."""
+    return isinstance(x, numbers.Real) and not isinstance(x, _BOOLS)
+
+
+def _integer(x):
+    """Whether x is an integer (Python's or numpy's), not a bool."""
+    return isinstance(x, (int, np.integer)) and not isinstance(x, _BOOLS)
 
 
 def _positive(x, unit, name, what):

@@ -13,7 +13,6 @@ the parameter and its allowed range.  No numba here: the later stages (:mod:`pnr
 
 import functools
 import math
-import numbers
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -147,11 +146,10 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
     if rotor not in ROTORS:
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     mode, sval = parse_sampling(sampling)
-    if (not _real(atol) or not _real(rtol) or not (atol > 0.0 and math.isfinite(atol))
+    if (not _ini._real(atol) or not _ini._real(rtol) or not (atol > 0.0 and math.isfinite(atol))
             or not (rtol >= 0.0 and math.isfinite(rtol))):
         raise ValueError(f"atol must be > 0 and rtol >= 0, both finite numbers; got atol = {atol!r}, rtol = {rtol!r}")
-    if isinstance(max_steps, _ini._BOOLS) or not isinstance(max_steps, (int, np.integer)) \
-            or not 1 <= max_steps <= MAX_STEPS:
+    if not (_ini._integer(max_steps) and 1 <= max_steps <= MAX_STEPS):
         raise ValueError(f"max_steps must be an integer from 1 to {MAX_STEPS}, got {max_steps!r}")
     if not isinstance(integrate_rotor, _ini._BOOLS):
         raise ValueError(f"integrate_rotor must be True or False, got {integrate_rotor!r}")
@@ -292,11 +290,6 @@ def _order(x, name, lo, hi):
     return x
 
 
-def _real(x):
-    """Whether x is a real number (Python's or numpy's), not a bool."""
-    return isinstance(x, numbers.Real) and not isinstance(x, _ini._BOOLS)
-
-
 def parse_sampling(sampling):
     """→ ('steps', None) | ('final', None) | ('dt', seconds) | ('per_orbit', n)."""
     if isinstance(sampling, str):
@@ -318,8 +311,7 @@ def parse_sampling(sampling):
         if key == "dt":
             return "dt", _ini.seconds(val, "sampling dt")
         if key == "per_orbit":
-            if (isinstance(val, bool) or not isinstance(val, numbers.Real)
-                    or not (math.isfinite(val) and val >= 1 and val == int(val))):
+            if not (_ini._real(val) and math.isfinite(val) and val >= 1 and val == int(val)):
                 raise ValueError(f"sampling per_orbit must be a positive integer, got {val!r}")
             return "per_orbit", int(val)
         raise ValueError(f"unknown sampling key {key!r}; use 'dt' or 'per_orbit'")

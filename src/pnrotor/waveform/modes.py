@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from pnrotor import quaternion as q
+from pnrotor.pn.initial import _integer, _real
 from pnrotor.waveform import polarizations as _pol
 from pnrotor.waveform.amplitudes import modes_in_frame
 from pnrotor.waveform.layout import ell_m as _ell_m
@@ -58,15 +59,9 @@ def _angle(value, name):
         if value.unit.physical_type != "angle":
             raise ValueError(f"{name} must be an angle (radians, or an astropy angle); got {value!r}")
         value = value.to_value(u.rad)
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(value):
+    if not (_real(value) and math.isfinite(value)):
         raise ValueError(f"{name} must be a finite angle in radians (a number, or an astropy angle); got {value!r}")
     return float(value)
-
-
-def _integer(value):
-    """Whether ``value`` is an integer (Python's or numpy's), not a bool."""
-    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
 def _scale(from_Mpc, to_Mpc, M_seconds):
@@ -171,7 +166,7 @@ class Modes:
 def check_arguments(ell_max, amplitude_order, distance=None):
     """:func:`modes`' options checked → (ell_max, 2 × amplitude_order, distance in Mpc or None); a ValueError
     naming the first bad one (callers check before computing a run)."""
-    if isinstance(ell_max, bool) or not isinstance(ell_max, (int, np.integer)) or not 2 <= ell_max <= ELL_MAX:
+    if not (_integer(ell_max) and 2 <= ell_max <= ELL_MAX):
         raise ValueError(f"ell_max must be an integer from 2 to {ELL_MAX}; got {ell_max!r}")
     try:
         order2 = 2.0 * float(amplitude_order)
