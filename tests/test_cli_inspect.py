@@ -154,6 +154,21 @@ def test_plot_refuses_a_population_table(tmp_path, capsys):
     assert not (tmp_path / "p.png").exists()
 
 
+@pytest.mark.parametrize("modes", [False, True])
+def test_plot_refuses_a_single_sample(tmp_path, capsys, modes):
+    """A run sampled 'final' (and its modes) has no line to draw: a one-line refusal, no empty panels."""
+    pytest.importorskip("matplotlib")
+    path = tmp_path / "f.h5"
+    assert main(["evolve", "--m1", "30", "--m2", "10", "--chi1", "0.6,0,0.2", "--chi2", "0,-0.4,0.1", "--f-ref", "100",
+                 "--sampling", "final", "-o", str(path)]
+                + ["--modes"] * modes) == 0
+    capsys.readouterr()
+    assert main(["plot", str(path)] + ["--group", "modes"] * modes) == 2
+    err = capsys.readouterr().err
+    assert "holds 1 sample of its" in err and "nothing to draw against time" in err and err.count("\n") == 1
+    assert not list(tmp_path.glob("*.png"))
+
+
 def test_plot_long_run_and_batch_group(files, tmp_path, capsys):
     pytest.importorskip("matplotlib")
     hdf5.write(tmp_path / "long.h5", frame_history(n=200_001))

@@ -15,6 +15,8 @@ because ``XLALSimInspiralSpinPNMode3m`` takes S1 + S2 where its formula (Arun et
 ℓ = 3 modes agree with ours to ≤ 1.2e-6 (test below).
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -126,3 +128,20 @@ def test_lal_series_need_strain_and_uniform_samples():
         polarization_series(modes(run, ell_max=2), 0.5)
     with pytest.raises(ValueError, match="uniform samples"):
         sph_harm_time_series(modes(evolve(*ALL_CASES["q3-precessing"]), ell_max=2, distance=DISTANCE_MPC))
+
+
+def test_lal_series_take_long_uniform_runs_with_their_rounding():
+    """Times t = k Δt far from t = 0 (a long BNS run; here the grid Δt = 1/4000 s shifted by 5000 s) differ from
+    uniform by the rounding of the product, ~1 ulp of t, more than 1e-9 Δt: still uniform, with Δt the sampling
+    asked for; a sample off by 1e-6 Δt is not."""
+    m = modes(evolve(*ALL_CASES["q3-precessing"], sampling=DT), ell_max=2, distance=DISTANCE_MPC)
+    M, dt = m.inputs["M_seconds"], 1.0 / 4000
+    t = (np.arange(m.t.size) + 5000 * 4000) * (dt / M) * M
+    assert np.max(np.abs(np.diff(t) - dt)) > 1e-9 * dt   # what the check once refused
+    inputs = dict(m.inputs, sampling_value=dt)
+    shifted = dataclasses.replace(m, t=t / M, t_seconds=t, inputs=inputs)
+    assert ls.SphHarmTimeSeriesGetMode(sph_harm_time_series(shifted), 2, 2).deltaT == dt
+    assert polarization_series(shifted, 0.5)[0].deltaT == dt
+    t[m.t.size // 2] += 1e-6 * dt
+    with pytest.raises(ValueError, match="uniform samples"):
+        sph_harm_time_series(dataclasses.replace(m, t=t / M, t_seconds=t, inputs=inputs))

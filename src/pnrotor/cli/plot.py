@@ -7,7 +7,7 @@ samples the rotor components of the first `ZOOM` samples. Frame histories of the
 nutating binary (those of ``pnrotor verify -o``, whose inputs describe it:
 `PrecessingNutatingBinary.from_inputs`) add the frame error δ(t) of eq:error_norm against its exact
 rotor, on a log scale, with its maximum. Waveform modes (``pnrotor evolve --modes``, group ``modes``):
-|h_ℓm|(t) of the modes that reach 1e-3 of max |h₂₂|, and h₊, h× seen from ``--inclination`` and
+|h_ℓm|(t) of the modes m ≥ 0 that reach 1e-3 of max |h₂₂|, and h₊, h× seen from ``--inclination`` and
 ``--phi-ref``. Lines of more than `MAX_POINTS` samples are drawn from every k-th sample (δ: the largest
 of each k samples), and the panel says so.
 
@@ -33,7 +33,7 @@ def add_parser(subparsers):
     )
     parser.add_argument("file", help="a pnrotor HDF5 file, e.g. waveforms/NAME.h5")
     parser.add_argument("-o", "--output", metavar="PNG", help="image to write, replaced if present (default: FILE with .png)")
-    parser.add_argument("--group", metavar="NAME", help="the run NAME of a batch file (modes: --group modes)")
+    parser.add_argument("--group", metavar="NAME", help="the run NAME of a batch file (modes: --group modes, or NAME.modes in a batch file)")
     parser.add_argument("--inclination", type=float, default=0.0, metavar="RAD",
                         help="modes: the line of sight's inclination for h+ and hx (default 0)")
     parser.add_argument("--phi-ref", type=float, default=0.0, metavar="RAD",
@@ -56,6 +56,9 @@ def run(args):
     if kind == "PopulationTable":
         raise UsageError(f"{args.file} holds the final states of unrelated binaries (a PopulationTable): nothing to "
                          "draw against time; `pnrotor inspect` or h5py reads it")
+    if result.t.size < 2:
+        raise UsageError(f"{args.file} holds {result.t.size} sample{'s' * (result.t.size != 1)} of its {kind} (sampling "
+                         "'final'?): nothing to draw against time; `pnrotor inspect` prints it")
     post_newtonian = all(hasattr(result, name) for name in ("ell_hat", "v", "chi1", "chi2"))
     binary = None if post_newtonian or kind == "Modes" else _binary(result)
     figure = Figure(figsize=(12, 8.5 if binary is None else 12.5), layout="constrained")

@@ -3,8 +3,8 @@ modes handed to LALSuite.
 
 One place for the call that tests and benchmarks share.  With ``pnrotor.pn.lalsuite_orders(approximant)``
 on pnrotor's side, ``lalsimulation.SimInspiralSpinTaylorPNEvolveOrbit`` is called with spinO = −1 (all
-spin terms), tideO = 0, phaseO = 7 (3.5PN), lscorr = 0 and no tidal deformability; its conventions are
-recorded in the project's ``LAL-CONVENTIONS.md``:
+spin terms), tideO = 0, phaseO = 7 (3.5PN), lscorr = 0 and no tidal deformability; its conventions,
+read from LALSimInspiralSpinTaylor.c and checked by tests/test_pn_lal.py against LAL's runs:
 
 * fStart is the gravitational-wave frequency, spins in and out are the dimensionless χᵢ;
 * the frame is n̂ = cos Φ E1 + sin Φ (L̂N × E1), λ̂ = L̂N × n̂, ℓ̂ = L̂N, with ℓ̂ = LNhat and n̂ = E1 at fStart;
@@ -47,14 +47,16 @@ def spintaylor_orbit(*args, **kwargs):
 
 
 def _uniform_step(modes):
-    """Δt in s of modes sampled uniformly (``sampling=Δt``), else a ValueError: LAL's series have one Δt."""
+    """Δt in s of modes sampled uniformly (``sampling=Δt``: that Δt exactly), else a ValueError: LAL's series
+    have one Δt."""
     t = modes.t_seconds
     if t.size < 2:
         raise ValueError("LAL time series need at least 2 samples")
     dt = (t[-1] - t[0]) / (t.size - 1)
-    if np.max(np.abs(np.diff(t) - dt)) > 1e-9 * dt:
+    # t = k Δt carries the rounding of its product (units of M times M in s), a few ulp of t: allowed too
+    if np.max(np.abs(np.diff(t) - dt)) > 1e-9 * dt + 8.0 * np.spacing(np.max(np.abs(t))):
         raise ValueError("LAL time series need uniform samples: evolve with sampling=Δt (seconds)")
-    return dt
+    return float(modes.inputs["sampling_value"]) if modes.inputs.get("sampling") == "dt" else dt
 
 
 def _series(create, name, epoch, dt, unit, data):

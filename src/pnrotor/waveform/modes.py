@@ -134,15 +134,15 @@ class Modes:
         return replace(self, data=rotate_modes(self.data, rotor, self.ell_max), frame=frame)
 
     def to_lal(self):
-        """These modes as LALSuite's ``SphHarmTimeSeries`` (strain; :func:`pnrotor.interop.lal.sph_harm_time_series`,
-        needs lalsuite)."""
+        """These modes, taken to the inertial frame, as LALSuite's ``SphHarmTimeSeries`` (strain;
+        :func:`pnrotor.interop.lal.sph_harm_time_series`, needs lalsuite)."""
         from pnrotor.interop.lal import sph_harm_time_series
 
         return sph_harm_time_series(self)
 
     def to_sxs(self):
-        """These modes as ``sxs.WaveformModes`` (r h / M against t/M; :func:`pnrotor.interop.sxs.waveform_modes`,
-        needs sxs)."""
+        """These modes, taken to the inertial frame, as ``sxs.WaveformModes`` (r h / M against t/M;
+        :func:`pnrotor.interop.sxs.waveform_modes`, needs sxs)."""
         from pnrotor.interop.sxs import waveform_modes
 
         return waveform_modes(self)
