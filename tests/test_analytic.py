@@ -86,8 +86,8 @@ def test_defaults_are_the_papers_constants():
     alpha = math.pi / 8
     assert b.Omega_orb == 2 * math.pi / 1000 and b.Omega_prec == 2 * math.pi / 10000
     assert b.alpha == alpha and b.alpha_dot == 2 * alpha / 1e5 and b.nu == math.pi / 80 and b.T == 1e6
-    # R0: a rotation by −3α/10 about x̂, half-angle −3α/20 (the paper's e^{−3α x/10} is twice that: analytic.py)
-    assert np.allclose(b.R0, [math.cos(3 * alpha / 20), -math.sin(3 * alpha / 20), 0, 0], atol=1e-16)
+    # R0 = e^{−3α x/10}: a rotation by −3α/5 about x̂ (half-angle −3α/10), as R₂ = e^{α x/2} tilts by α
+    assert np.allclose(b.R0, [math.cos(3 * alpha / 10), -math.sin(3 * alpha / 10), 0, 0], atol=1e-16)
 
 
 def test_alpha_dot_and_R0_follow_an_overridden_alpha_and_R0_is_normalized():

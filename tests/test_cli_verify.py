@@ -26,10 +26,12 @@ def test_verify_fails_above_the_limit_and_reports_resets(capsys):
 
 
 def test_verify_fails_when_the_integration_does_not_reach_T(capsys):
-    # the paper's binary passes within ~1e-8 of R = −1 at t = 760000, where the unreset generator is singular
-    code = main(["verify", "--formulation", "generator-noreset", "--atol", "1e-12", "--t-end", "7.7e5"])
+    # backward, the paper's binary passes R = −1 (to ~5e-15) at t = −75000, where the unreset generator is singular;
+    # a negative --t-end in exponent form is a value, not an unknown option
+    code = main(["verify", "--formulation", "generator-noreset", "--atol", "1e-12", "--t-end", "-8e4"])
     out = capsys.readouterr().out
     assert code == 1 and "integration did not reach T" in out and "status           -2" in out
+    assert float(out.split("(at t = ")[1].split(")")[0]) == pytest.approx(-75000.0, abs=1e-3)
 
 
 def test_verify_writes_the_history(tmp_path, capsys):
@@ -84,8 +86,21 @@ def test_bench_rejects_bad_input(tmp_path, capsys):
         with pytest.raises(SystemExit) as parsed:
             main([command, "--damping", "nan", "1", "-o", str(tmp_path / "b")])
         err = capsys.readouterr().err
-        assert parsed.value.code == 2 and "--damping: must be a finite number" in err and err.count("\n") == 1
+        assert parsed.value.code == 2 and "--damping: must be a finite number >= 0" in err and err.count("\n") == 1
         assert not (tmp_path / "b").exists()
+    with pytest.raises(SystemExit) as parsed:   # growing constraint violations: refused, not "stopped"
+        main(["verify", "--damping", "-1e-3", "1"])
+    assert parsed.value.code == 2 and "--damping: must be a finite number >= 0, got '-1e-3'" in capsys.readouterr().err
+    assert main(["bench", "--pn", "--damping", "1", "1", "-o", str(tmp_path / "b")]) == 2   # was ignored
+    assert "--damping are for the paper's study, not --pn" in capsys.readouterr().err and not (tmp_path / "b").exists()
+
+
+def test_cli_damping_default_is_the_librarys():
+    import inspect
+
+    from pnrotor.cli import DAMPING
+    from pnrotor.integrate import integrate_angular_velocity
+    assert inspect.signature(integrate_angular_velocity).parameters["damping"].default == DAMPING
 
 
 @pytest.mark.parametrize("args, line", [
@@ -94,7 +109,7 @@ def test_bench_rejects_bad_input(tmp_path, capsys):
     (["evolve", "--compression", "bz2"], "pnrotor evolve: error: argument --compression: invalid choice: 'bz2' "
                                          "(choose from 'gzip', 'lzf') (see pnrotor evolve --help)\n"),
     (["evolve", "--bogus"], "pnrotor: error: unrecognized arguments: --bogus (see pnrotor --help)\n"),
-    (["verify", "--damping", "abc", "1"], "pnrotor verify: error: argument --damping: must be a finite number, "
+    (["verify", "--damping", "abc", "1"], "pnrotor verify: error: argument --damping: must be a finite number >= 0, "
                                           "got 'abc' (see pnrotor verify --help)\n"),
 ])
 def test_parsing_errors_are_one_line(args, line, capsys):

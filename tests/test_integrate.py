@@ -100,7 +100,7 @@ def test_history_records_the_run():
     assert h.nfev > h.nsteps and h.wall_time > 0
     # the generator is reset about twice per orbit (|r| = half the rotation angle passes π/2 each half turn)
     assert 5 <= h.n_resets <= 15
-    assert h.inputs["omega"] == "PrecessingNutatingBinary" and np.array_equal(h.inputs["R0"], R0)
+    assert h.inputs["omega"] == "PrecessingNutatingBinary" and np.allclose(h.inputs["R0"], R0, rtol=0, atol=2e-16)
     assert h.inputs["t0"] == 0.0 and h.inputs["t_end"] == 5e3 and h.inputs["Omega_orb"] == BINARY.Omega_orb
     assert integrate_angular_velocity(BINARY, (0.0, 5e3), R0, "generator-noreset").n_resets == 0
 
@@ -187,6 +187,7 @@ def test_samples_after_the_start_keep_the_sign_of_the_solution(formulation, t_ev
     (dict(t_span=5.0), "t_span"),
     (dict(omega=lambda t: [1.0, 2.0]), "three finite floats"),
     (dict(formulation="vectors-damped", damping=(math.nan, 1.0)), "damping"),
+    (dict(formulation="vectors-damped", damping=(0.01, -0.01)), r"damping \(λ, μ\) must be finite and >= 0"),
     (dict(atol=np.full(4, 1e-10)), "atol and rtol must be numbers"),   # ran, then failed as a TypeError
     (dict(rtol="0"), "atol and rtol must be numbers"), (dict(atol=True), "atol and rtol must be numbers"),
 ])

@@ -258,12 +258,11 @@ def _finite(name, value):
 class PrecessingNutatingBinary:
     """The paper's precessing and nutating binary (Sec. V-B, eq:BinaryRotor, eq:precession_constants).
 
-    Parameters (defaults are the paper's but for R0): ``Omega_orb`` = 2π/1000, ``Omega_prec`` = 2π/10000,
-    ``alpha`` = π/8, ``alpha_dot`` = 2α/10⁵, ``nu`` = π/80, ``R0`` = exp(−3α x̂/20), a rotation by −3α/10
-    about x̂, ``T`` = 10⁶ (the span of the paper's study: 1000 orbits, 100 precession cycles).  The paper
-    writes R₀ = e^{−3α x/10}, which in its own notation (R₁ = e^{Ω t z/2} rotates by Ω t) rotates by −3α/5:
-    this default is half that rotation, as every measurement of this project so far used it (a review of
-    2026-11-27 found it; a constant rotation of the whole binary).  ``alpha_dot`` and ``R0`` default
+    Parameters (defaults are the paper's, eq:precession_constants): ``Omega_orb`` = 2π/1000, ``Omega_prec`` =
+    2π/10000, ``alpha`` = π/8, ``alpha_dot`` = 2α/10⁵, ``nu`` = π/80, ``R0`` = e^{−3α x̂/10} (in the paper's
+    notation, where R₂ = e^{α x̂/2} tilts by α, a rotation by −3α/5 about x̂; until late 2026-11-27 the default was
+    half that rotation, e^{−3α x̂/20}, and so are the verification numbers measured before then), ``T`` = 10⁶
+    (the span of the paper's study: 1000 orbits, 100 precession cycles).  ``alpha_dot`` and ``R0`` default
     to these expressions in the given ``alpha``; ``R0`` may be any nonzero quaternion (w, x, y, z)
     and is normalized (one already unit to rounding is kept as given, since normalizing it again may
     change its last bits); all parameters must be finite and ``T`` > 0. :meth:`describe` gives the
@@ -293,7 +292,7 @@ class PrecessingNutatingBinary:
         set_("alpha_dot", 2.0 * self.alpha / 1.0e5 if self.alpha_dot is None
              else _finite("alpha_dot", self.alpha_dot))
         if self.R0 is None:
-            R0 = quat.exp(np.array([-0.3 * self.alpha / 2.0, 0.0, 0.0]))
+            R0 = quat.exp(np.array([-0.3 * self.alpha, 0.0, 0.0]))
         else:
             R0 = np.array(self.R0, dtype=np.float64)
             if R0.shape != (4,) or not np.all(np.isfinite(R0)) or not np.any(R0):

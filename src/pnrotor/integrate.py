@@ -101,8 +101,8 @@ def integrate_angular_velocity(omega, t_span, R0, formulation="rotor", method="D
         DOP853 only: keep the integrator's dense output of the evolved state in ``history.dense``
         (convert its values with ``pnrotor.formulations.get(formulation).to_rotors``).
     damping : (λ, μ)
-        Damping rates of 'vectors-damped' (eq:vector-norm-damping, eq:vector-orthogonality-damping);
-        their signs are flipped when integrating backward, so that constraint violations decay in the
+        Damping rates of 'vectors-damped' (eq:vector-norm-damping, eq:vector-orthogonality-damping), finite
+        and ≥ 0; their signs are flipped when integrating backward, so that constraint violations decay in the
         direction of integration. Rates well above the inverse step size make the system stiff.
     max_steps : int
         Maximum number of step attempts.
@@ -141,8 +141,9 @@ def integrate_angular_velocity(omega, t_span, R0, formulation="rotor", method="D
     p = np.array(p_omega, dtype=np.float64)
     if form.n_params:
         lam, mu = (float(x) for x in damping)
-        if not (math.isfinite(lam) and math.isfinite(mu)):
-            raise ValueError(f"damping (λ, μ) must be finite, got {damping!r}")
+        if not (math.isfinite(lam) and math.isfinite(mu) and lam >= 0.0 and mu >= 0.0):
+            raise ValueError(f"damping (λ, μ) must be finite and >= 0 (negative rates would make the constraint "
+                             f"violations grow), got {damping!r}")
         # the damping terms vanish on the constraint surface and pull towards it in the direction of
         # integration; backward in time that takes −λ, −μ (with +λ, +μ violations would grow as e^{λ|t|})
         direction = 1.0 if t_end >= t0 else -1.0

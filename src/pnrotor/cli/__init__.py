@@ -12,6 +12,7 @@ one line with exit status 1; Ctrl-C, SIGTERM and SIGHUP stop a command with exit
 import argparse
 import importlib
 import math
+import re
 import signal
 import sys
 import threading
@@ -23,27 +24,37 @@ class UsageError(Exception):
     """A problem with the command line or its input that the user can fix."""
 
 
+DAMPING = (0.01, 0.01)
+"""The damping rates of `pnrotor.integrate_angular_velocity`, the default of ``--damping``."""
+
+
 def add_damping_option(parser):
-    """``--damping LAMBDA MU``: the damping rates of vectors-damped (`verify` and `bench`), by default
-    those of `pnrotor.integrate_angular_velocity`."""
-    parser.add_argument("--damping", type=_finite, nargs=2, default=(0.01, 0.01), metavar=("LAMBDA", "MU"),
-                        help="damping rates of vectors-damped (default: 0.01 0.01)")
+    """``--damping LAMBDA MU``: the damping rates of vectors-damped (`verify` and `bench`); None when not given
+    (`DAMPING` then)."""
+    parser.add_argument("--damping", type=_rate, nargs=2, metavar=("LAMBDA", "MU"),
+                        help=f"damping rates of vectors-damped, finite and >= 0 (default: {DAMPING[0]} {DAMPING[1]})")
 
 
-def _finite(text):
-    """A finite float from the command line (argparse's type), or the parser's one-line error."""
+def _rate(text):
+    """A finite float ≥ 0 from the command line (argparse's type), or the parser's one-line error."""
     try:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
     return value
 
 
 class _Parser(argparse.ArgumentParser):
     """argparse's parser, whose errors (an unknown option, a value of the wrong type) are one line on stderr
-    and exit status 2, as every other error of the command line, not the usage block and then the error."""
+    and exit status 2, as every other error of the command line, not the usage block and then the error; and
+    which takes a negative number in exponent form (``--t-end -1e6``) or ``-inf`` as a value, where argparse
+    (through Python 3.12) takes only ``-5`` and ``-0.5`` and reads ``-1e6`` as an unknown option."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$|^-inf$", re.IGNORECASE)
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")

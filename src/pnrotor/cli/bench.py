@@ -20,7 +20,7 @@ import math
 import time
 from pathlib import Path
 
-from pnrotor.cli import UsageError, add_damping_option
+from pnrotor.cli import DAMPING, UsageError, add_damping_option
 
 
 def add_parser(subparsers):
@@ -71,7 +71,7 @@ def run(args):
     import pnrotor.analytic  # noqa: F401  (compiles pnrotor's kernels or loads them from numba's cache)
     import pnrotor.integrate  # noqa: F401
     load_s = time.perf_counter() - start
-    rows, curves = study.sweep(t_end, sorted(atols, reverse=True), repeat, tuple(args.damping), not args.no_scipy)
+    rows, curves = study.sweep(t_end, sorted(atols, reverse=True), repeat, tuple(args.damping or DAMPING), not args.no_scipy)
     path = outdir / "bench.csv"
     with open(path, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=study.COLUMNS)
@@ -94,8 +94,8 @@ def run(args):
 
 def run_pn(args):
     """``--pn``: :func:`pnrotor.pn_study.main` with the options that apply to it."""
-    if args.t_end is not None or args.atols is not None:
-        raise UsageError("--t-end and --atols are for the paper's study, not --pn")
+    if args.t_end is not None or args.atols is not None or args.damping is not None:
+        raise UsageError("--t-end, --atols and --damping are for the paper's study, not --pn")
     if args.repeat is not None and args.repeat < 1:
         raise UsageError(f"--repeat must be at least 1, got {args.repeat}")
     outdir = _output_folder(args.output)

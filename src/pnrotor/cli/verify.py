@@ -17,7 +17,7 @@ import math
 import time
 from pathlib import Path
 
-from pnrotor.cli import add_damping_option
+from pnrotor.cli import DAMPING, add_damping_option
 
 DEFAULT_MAX_ERROR = 2e-10
 """Bound on max δ for the default run (rotor, DOP853, atol 1e-12, T = 10⁶)."""
@@ -66,7 +66,7 @@ def run(args):
     if args.output and not Path(args.output).parent.is_dir():
         raise FileNotFoundError(f"folder {Path(args.output).parent} does not exist (-o {args.output}); create it first")
     R0 = binary.rotor(0.0)
-    options = dict(formulation=args.formulation, method=method, atol=args.atol, damping=tuple(args.damping))
+    options = dict(formulation=args.formulation, method=method, atol=args.atol, damping=tuple(args.damping or DAMPING))
     imported = time.perf_counter()
     integrate_angular_velocity(binary, (0.0, math.copysign(1.0, t_end)), R0, **options)
     loaded = time.perf_counter()
@@ -78,7 +78,7 @@ def run(args):
 
     print(f"pnrotor verify: precessing/nutating binary (Boyle 2016, Sec. V-B) over t in [0, {t_end:g}]")
     print(f"  formulation      {history.formulation}, {history.method}, atol {history.atol:g}, rtol 0"
-          + (f", damping λ {args.damping[0]:g} μ {args.damping[1]:g}" if args.formulation == "vectors-damped" else ""))
+          + (f", damping λ {options['damping'][0]:g} μ {options['damping'][1]:g}" if args.formulation == "vectors-damped" else ""))
     print(f"  max δ            {delta[worst]:.3e} at t = {history.t[worst]:.10g}"
           f"   ({'≤' if delta[worst] <= args.max_error else '>'} {args.max_error:g})")
     print(f"  final δ          {delta[-1]:.3e} at t = {history.t[-1]:.10g}")
