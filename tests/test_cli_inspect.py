@@ -83,6 +83,16 @@ def test_inspect_large_input_array_is_summarized(tmp_path, capsys):
     assert "  t_eval  (1001,) float64, from 0.0 to 10.0" in out.splitlines()
 
 
+def test_inspect_large_array_with_nans_gives_the_span_of_its_finite_values(tmp_path, capsys):
+    """A population column with empty cells (NaN) on some rows: the span of the others and the count of NaNs,
+    not "from nan to nan"; a column of NaNs only says so."""
+    f_max = np.where(np.arange(10) % 2, 100.0, np.nan)
+    hdf5.write(tmp_path / "run.h5", frame_history(inputs={"f_max": f_max, "none": np.full(9, np.nan)}))
+    lines = inspect_output(capsys, tmp_path / "run.h5").splitlines()
+    assert "  f_max  (10,) float64, from 100.0 to 100.0, 5 not finite" in lines
+    assert "  none   (9,) float64, no finite value, 9 not finite" in lines
+
+
 def test_inspect_large_text_array_lists_its_values(tmp_path, capsys):
     """A population's per-row options are text arrays: their distinct values, not a min and max of strings."""
     names = np.array(["T4", "T1", "T4"] * 4, dtype=object)
@@ -189,7 +199,7 @@ def test_verify_file_carries_the_binary_and_plot_draws_its_frame_error(tmp_path,
     paper = {"omega": "PrecessingNutatingBinary", "Omega_orb": 2 * math.pi / 1000, "Omega_prec": 2 * math.pi / 10000,
              "alpha": alpha, "alpha_dot": 2 * alpha / 1e5, "nu": math.pi / 80, "T": 1e6}
     assert {name: history.inputs[name] for name in paper} == paper
-    assert np.allclose(history.inputs["binary_R0"], [math.cos(0.15 * alpha), -math.sin(0.15 * alpha), 0, 0], atol=1e-16)
+    assert np.allclose(history.inputs["binary_R0"], [math.cos(0.3 * alpha), -math.sin(0.3 * alpha), 0, 0], atol=1e-16)
     exact = PrecessingNutatingBinary().rotor(history.t)
     assert np.array_equal(PrecessingNutatingBinary.from_inputs(history.inputs).rotor(history.t), exact)
     delta = quat.frame_error(history.R, exact)

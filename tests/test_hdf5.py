@@ -548,6 +548,56 @@ def test_batch_writer_round_trip_is_bitwise(tmp_path, evolution_kind):
     assert sorted(os.listdir(tmp_path)) == ["again.h5", "batch.h5", "one.h5"]
 
 
+@pytest.mark.parametrize("damage", ["nan", "kind", "missing", "string"])
+def test_copy_from_copies_only_what_read_accepts(tmp_path, damage):
+    """A source run read would refuse (a NaN, an unknown kind, a missing dataset, a damaged string) is not
+    copied: the ValueError names the source, and the batch holds no such run nor its file."""
+    source = tmp_path / "source.h5"
+    hdf5.write(source, frame_history())
+    with h5py.File(source, "r+") as f:
+        if damage == "nan":
+            f["R"][3, 1] = np.nan
+        elif damage == "kind":
+            f.attrs["kind"] = "Nope"
+        elif damage == "missing":
+            del f["R"]
+        else:
+            f.attrs["message"] = "edited without its CRC"
+    with pytest.raises(ValueError, match=re.escape(str(source))):
+        with hdf5.batch(tmp_path / "batch.h5") as batch:
+            batch.add("fine", frame_history())
+            batch.copy_from(source, "/", "copied")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["source.h5"]
+
+
+def test_copy_from_reports_a_failed_write_as_the_targets(tmp_path, monkeypatch):
+    """An error HDF5 meets while copying into the batch (here a file-size limit, errno 27 in its text) is the
+    target's: one OSError line naming it, not "SOURCE is corrupt" (the source is fine)."""
+    hdf5.write(tmp_path / "source.h5", frame_history())
+
+    def too_large(self, *args, **kwargs):
+        raise RuntimeError("Can't decrement id ref count (unable to extend file properly, errno = 27,\n"
+                           " error message = 'File too large')")
+
+    monkeypatch.setattr(h5py.Group, "copy", too_large)
+    with pytest.raises(OSError, match=r"^\[Errno 27\] File too large while writing .*batch\.h5$"):
+        with hdf5.batch(tmp_path / "batch.h5") as batch:
+            batch.copy_from(tmp_path / "source.h5", "/", "copied")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["source.h5"]
+
+
+def test_numpy_strings_are_written_as_strings(tmp_path):
+    """np.str_ values (which evolve accepts for its string options) and numpy string arrays are written as the
+    str and object arrays of str they equal, not refused by h5py after the layout check passed them."""
+    run = frame_history(formulation=np.str_("rotor"))
+    run.inputs.update(precession=np.str_("averaged"), names=np.array(["a", "bc"]))
+    hdf5.write(tmp_path / "s.h5", run)
+    back = hdf5.read(tmp_path / "s.h5")
+    assert type(back.formulation) is str and back.formulation == "rotor"
+    assert type(back.inputs["precession"]) is str and back.inputs["precession"] == "averaged"
+    assert back.inputs["names"].dtype == object and back.inputs["names"].tolist() == ["a", "bc"]
+
+
 @pytest.mark.parametrize("error", [KeyboardInterrupt, RuntimeError])
 @pytest.mark.parametrize("existing", [None, "overwrite", "append"])
 def test_batch_writer_interrupted_leaves_no_file_or_the_old_one(tmp_path, error, existing):
@@ -889,22 +939,28 @@ def test_kind_whose_class_is_not_importable(tmp_path, monkeypatch, evolution_kin
 
 
 def test_a_full_disk_is_found_before_writing(tmp_path, monkeypatch):
-    """Arrays larger than the free space: one OSError (ENOSPC) naming the folder and the sizes, and neither the
-    file nor a temporary one is left; the same for a run added to a batch."""
+    """Arrays and 1 MiB for metadata larger than the free space: one OSError (ENOSPC) naming the folder and the
+    sizes, and neither the file nor a temporary one is left; the same for a run added to a batch or copied into
+    one (whose HDF5 object copy died of a double free with a few kB free)."""
     import errno
     import shutil
     history = frame_history()
-    free = history.t.nbytes + history.R.nbytes - 1
+    hdf5.write(tmp_path / "source.h5", history)
+    free = history.t.nbytes + history.R.nbytes + 2 ** 20 - 1
     monkeypatch.setattr(shutil, "disk_usage", lambda folder: shutil._ntuple_diskusage(10 ** 9, 10 ** 9 - free, free))
-    with pytest.raises(OSError, match=r"no space for run\.h5 in .*: its arrays need .* MiB are free") as error:
+    with pytest.raises(OSError, match=r"no space for run\.h5 in .*: its arrays need 4.0 KiB and its metadata up to "
+                       r"1\.0 MiB, 1\.0 MiB are free") as error:
         hdf5.write(tmp_path / "run.h5", history)
     assert error.value.errno == errno.ENOSPC
     with pytest.raises(OSError, match="no space"):
         with hdf5.batch(tmp_path / "many.h5") as runs:
             runs.add("a", history)
-    with pytest.raises(OSError, match="need .* MiB before compression"):
+    with pytest.raises(OSError, match="no space"):
+        with hdf5.batch(tmp_path / "many.h5") as runs:
+            runs.copy_from(tmp_path / "source.h5", "/", "a")
+    with pytest.raises(OSError, match="need .* before compression"):
         hdf5.write(tmp_path / "run.h5", history, compression="gzip")   # the raw size bounds the compressed one
-    assert list(tmp_path.iterdir()) == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["source.h5"]
 
 
 def test_hdf5s_full_disk_report_becomes_one_oserror(tmp_path, monkeypatch):

@@ -7,7 +7,8 @@ every write and read of it:
 * `write(path, run)` stores a run dataclass: each field that is an array becomes a dataset (float64 stays
   float64; chunked with a Fletcher-32 checksum per chunk and optional gzip/lzf compression, or with
   ``checksum=False`` and no compression contiguous, see `write`; an object array of `str` a fixed-length
-  UTF-8 dataset, stored the same way), each number, string, bool or ``None`` an
+  UTF-8 dataset, stored the same way, as is a numpy string array, read back as one of `str`), each number,
+  string (numpy's ``np.str_`` too, read back as `str`), bool or ``None`` an
   attribute, each dict a subgroup holding its items by the same rules, each list or tuple of numbers
   a dataset marked with a ``sequence`` attribute. The ``dense`` field (the integrator's dense output, a
   function rather than data) and other callables are not written. Metadata attributes name the
@@ -24,7 +25,8 @@ every write and read of it:
   and the target is then absent or still the old complete file; the next write of the same target on
   that host removes the temporary files of writers no longer alive.
 * Batch files hold one run per top-level group (`list_runs`). `batch(path)` is the way to write many runs:
-  a context manager whose `Batch` adds each run (`Batch.add`, or `Batch.copy_from` another file) to the
+  a context manager whose `Batch` adds each run (`Batch.add`, or `Batch.copy_from` another file, which reads the
+  run first and copies only one `read` accepts) to the
   temporary file, at the cost of that run alone, and renames the file into place on leaving the block
   without an exception. ``batch(path, append=True)`` adds runs to an existing batch file, which it copies
   to the temporary name once; ``write(..., group=NAME)`` adds one run that way, so each such call costs a
@@ -44,6 +46,7 @@ import errno
 import importlib
 import numbers
 import os
+import re
 import signal
 import socket
 import secrets
@@ -224,7 +227,7 @@ def write(path, run, *, overwrite=False, compression=None, checksum=True, group=
             runs.add(group, run)  # checks the run
         return path
     _check_target(path, overwrite)
-    _check_space(path, run, compression)
+    _check_space(path, _run_bytes(run), compression)
     with _replacing(path, overwrite) as f:
         _put_run(f, run, compression, checksum)
     return path
@@ -296,16 +299,28 @@ class Batch:
     def add(self, name, run):
         """Write the run dataclass `run` as the run `name`, by the rules of `write` (checked as it checks)."""
         _check_run(run)
-        _check_space(self.path, run, self.compression)
+        _check_space(self.path, _run_bytes(run), self.compression)
         with self._adding(name) as f:
             _put_run(f.create_group(name), run, self.compression, self.checksum)
 
-    def copy_from(self, source, group, name=None):
+    def copy_from(self, source, group, name=None, *, verify=True):
         """Copy the run `group` of the pnrotor file `source` (``"/"`` for a one-run file) as the run `name`
-        (default: `group`), as stored: HDF5 copies its datasets' bytes, their compression included."""
+        (default: `group`), as stored: HDF5 copies its datasets' bytes, their compression included, after
+        checking the free space as `add` does.  With `verify` the run is first read as `read` reads it (layout,
+        checksums, the CRC of its strings), so a run `read` refuses is not copied (a ValueError naming `source`);
+        ``verify=False`` is for a source already read or just written by pnrotor (a run of 10⁴ samples took
+        ~13 ms to read, several times its copy)."""
         name = group if name is None else name
-        with _open(source) as f, self._adding(name) as target:
-            f.copy(_run_group(f, source, group), target, name)
+        if verify:
+            read(source, group)
+        with h5py.File(source, "r") as f:
+            run = _run_group(f, source, group)
+            stored = []
+            run.visititems(lambda _, item: stored.append(item.id.get_storage_size())
+                           if isinstance(item, h5py.Dataset) else None)
+            _check_space(self.path, sum(stored))
+            with self._adding(name) as target:   # errors here are the target's, not "source is corrupt"
+                f.copy(run, target, name)
 
     @contextmanager
     def _adding(self, name):
@@ -551,17 +566,31 @@ def _check_target(path, overwrite):
         raise FileExistsError(f"{path} exists; pass overwrite=True (--overwrite) to replace it")
 
 
-def _check_space(path, run, compression):
-    """An `OSError` (ENOSPC) naming the folder of `path` and the sizes if the arrays of `run` do not fit in its
-    free space: a full disk found before a byte is written, not in the middle of a large write, where HDF5
-    fails badly (a compressed write to a full tmpfs crashed the process with SIGSEGV after its error).  The
-    uncompressed size is what the file holds (plus metadata), and an upper bound of a compressed file's."""
-    need = _array_bytes({field.name: getattr(run, field.name) for field in dataclasses.fields(run)})
+_METADATA_MARGIN = 2 ** 20
+"""Bytes of free space `_check_space` keeps beyond a run's arrays, for HDF5's metadata (a run's groups and
+attributes take tens of kB)."""
+
+
+def _check_space(path, need, compression=None):
+    """An `OSError` (ENOSPC) naming the folder of `path` and the sizes if `need` bytes of arrays (`_run_bytes`, the
+    uncompressed size: what the file holds, and an upper bound of a compressed file's) and `_METADATA_MARGIN` do
+    not fit in its free space: a full disk found before a byte is written, not in the middle of a write, where
+    HDF5 fails badly (a compressed write to a full tmpfs crashed the process with SIGSEGV after its error;
+    `Batch.copy_from` with a few kB free, a double free in HDF5's object copy)."""
     free = shutil.disk_usage(Path(path).parent).free
-    if need > free:
+    if need + _METADATA_MARGIN > free:
         raise OSError(errno.ENOSPC, f"no space for {Path(path).name} in {Path(path).parent}: its arrays need "
-                                    f"{need / 2 ** 20:.1f} MiB{' before compression' * bool(compression)}, "
-                                    f"{free / 2 ** 20:.1f} MiB are free")
+                                    f"{_size(need)}{' before compression' * bool(compression)} and its metadata up "
+                                    f"to {_size(_METADATA_MARGIN)}, {_size(free)} are free")
+
+
+def _size(n):
+    return f"{n / 2 ** 20:.1f} MiB" if n >= 2 ** 20 else f"{n / 2 ** 10:.1f} KiB"
+
+
+def _run_bytes(run):
+    """Bytes of the arrays of the run dataclass `run`."""
+    return _array_bytes({field.name: getattr(run, field.name) for field in dataclasses.fields(run)})
 
 
 def _array_bytes(value):
@@ -611,9 +640,11 @@ def _replacing(path, overwrite, copy=False, durable=True):
         if writeback:
             writeback.join()
         temporary.unlink(missing_ok=True)
-        if "errno = 28" in str(error):   # HDF5's report of a full disk (a RuntimeError or OSError of many lines)
-            raise OSError(errno.ENOSPC, f"no space left on the device of {path.parent} while writing {path.name}") \
-                from None
+        code = re.search(r"errno = (\d+)", str(error)) if isinstance(error, (OSError, RuntimeError)) else None
+        if code:   # HDF5's report of a failed system call (a RuntimeError or OSError of many lines): one line
+            code = int(code.group(1))
+            raise OSError(code, f"no space left on the device of {path.parent} while writing {path.name}"
+                          if code == errno.ENOSPC else f"{os.strerror(code)} while writing {path}") from None
         raise
     if durable:
         _fsync(path.parent)
@@ -761,6 +792,8 @@ def _put_fields(g, run, units, storage):
 def _put(g, name, value, storage, where):
     """Store `value` under `name` in group `g` by the rules in the module docstring; `storage` is
     (compression, checksum) of the datasets."""
+    if isinstance(value, np.str_) or isinstance(value, np.ndarray) and value.dtype.kind == "U":
+        value = str(value) if isinstance(value, np.str_) else value.astype(object)   # numpy's strings as str's
     if isinstance(value, dict):
         sub = g.create_group(name)
         for key, item in value.items():

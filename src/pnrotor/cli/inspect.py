@@ -143,5 +143,8 @@ def _format(value):
             distinct = sorted({str(x) for x in value.flat})
             return f"{value.shape} {value.dtype}, {len(distinct)} distinct: " + ", ".join(map(repr, distinct[:8])) + \
                 (", ..." if len(distinct) > 8 else "")
-        return f"{value.shape} {value.dtype}, from {value.min().item()!r} to {value.max().item()!r}"
+        finite = value[np.isfinite(value)] if value.dtype.kind == "f" else value.ravel()
+        missing = value.size - finite.size   # NaN (a population's empty cell) or inf: counted apart
+        span = f"from {finite.min().item()!r} to {finite.max().item()!r}" if finite.size else "no finite value"
+        return f"{value.shape} {value.dtype}, {span}" + (f", {missing} not finite" if missing else "")
     return repr(value)
