@@ -145,3 +145,14 @@ def test_bench_pn_writes_the_work_precision_study(tmp_path, capsys, monkeypatch)
 def test_bench_pn_rejects_the_options_of_the_papers_study(tmp_path, capsys):
     assert main(["bench", "--pn", "--t-end", "1e4", "-o", str(tmp_path)]) == 2
     assert "--t-end" in capsys.readouterr().err
+
+
+def test_negative_values_are_values_not_options():
+    """argparse (Python 3.11) read '-1e6' and '-0.6,0,0.2' as unknown options ("expected one argument")."""
+    from pnrotor.cli import build_parser
+    args = build_parser().parse_args(["evolve", "--m1", "30", "--m2", "10", "--chi1", "-0.6,0,0.2", "--chi2",
+                                      "-.1,0,0", "--f-ref", "20"])
+    assert (args.chi1, args.chi2) == ("-0.6,0,0.2", "-.1,0,0")
+    assert build_parser().parse_args(["verify", "--t-end", "-1E+6"]).t_end == -1e6
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["verify", "--t-end", "-x"])   # an option still, unknown

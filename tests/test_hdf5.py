@@ -586,6 +586,24 @@ def test_copy_from_reports_a_failed_write_as_the_targets(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["source.h5"]
 
 
+def test_errors_about_other_files_in_a_batch_block_stay_theirs(tmp_path):
+    """Only HDF5's reports about the file being written become "... while writing BATCH": a missing source of
+    copy_from (checked or not) or a file the caller opens in the block keeps its own error and name."""
+    (tmp_path / "text.h5").write_text("not HDF5")
+    for verify in (True, False):
+        with pytest.raises(FileNotFoundError, match=r"missing\.h5: no such file"):
+            with hdf5.batch(tmp_path / "b.h5") as batch:
+                batch.copy_from(tmp_path / "missing.h5", "/", "x", verify=verify)
+        with pytest.raises(ValueError, match=r"text\.h5 is not an HDF5 file"):
+            with hdf5.batch(tmp_path / "b.h5") as batch:
+                batch.copy_from(tmp_path / "text.h5", "/", "x", verify=verify)
+    with pytest.raises(FileNotFoundError, match="name = '.*other.h5'"):
+        with hdf5.batch(tmp_path / "b.h5") as batch:
+            batch.add("a", frame_history())
+            h5py.File(tmp_path / "other.h5", "r")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["text.h5"]
+
+
 def test_numpy_strings_are_written_as_strings(tmp_path):
     """np.str_ values (which evolve accepts for its string options) and numpy string arrays are written as the
     str and object arrays of str they equal, not refused by h5py after the layout check passed them."""
@@ -970,8 +988,8 @@ def test_hdf5s_full_disk_report_becomes_one_oserror(tmp_path, monkeypatch):
     import errno
 
     def full(g, run, compression, checksum):
-        raise RuntimeError("Unable to flush raw data (file write failed: time = now\n, filename = 'x', errno = 28, "
-                           "error message = 'No space left on device')")
+        raise RuntimeError(f"Unable to flush raw data (file write failed: time = now\n, filename = '{g.file.filename}', "
+                           "errno = 28, error message = 'No space left on device')")
 
     monkeypatch.setattr(hdf5, "_put_run", full)
     with pytest.raises(OSError, match=r"^\[Errno 28\] no space left on the device of .* while writing run\.h5$") as e:

@@ -133,7 +133,7 @@ def test_lal_series_need_strain_and_uniform_samples():
 def test_lal_series_take_long_uniform_runs_with_their_rounding():
     """Times t = k Δt far from t = 0 (a long BNS run; here the grid Δt = 1/4000 s shifted by 5000 s) differ from
     uniform by the rounding of the product, ~1 ulp of t, more than 1e-9 Δt: still uniform, with Δt the sampling
-    asked for; a sample off by 1e-6 Δt is not."""
+    asked for (every other sample: twice that); a sample off by 1e-6 Δt is not."""
     m = modes(evolve(*ALL_CASES["q3-precessing"], sampling=DT), ell_max=2, distance=DISTANCE_MPC)
     M, dt = m.inputs["M_seconds"], 1.0 / 4000
     t = (np.arange(m.t.size) + 5000 * 4000) * (dt / M) * M
@@ -142,6 +142,8 @@ def test_lal_series_take_long_uniform_runs_with_their_rounding():
     shifted = dataclasses.replace(m, t=t / M, t_seconds=t, inputs=inputs)
     assert ls.SphHarmTimeSeriesGetMode(sph_harm_time_series(shifted), 2, 2).deltaT == dt
     assert polarization_series(shifted, 0.5)[0].deltaT == dt
+    every_other = dataclasses.replace(shifted, t=shifted.t[::2], t_seconds=t[::2], data=shifted.data[:, ::2])
+    assert ls.SphHarmTimeSeriesGetMode(sph_harm_time_series(every_other), 2, 2).deltaT == pytest.approx(2 * dt)
     t[m.t.size // 2] += 1e-6 * dt
     with pytest.raises(ValueError, match="uniform samples"):
         sph_harm_time_series(dataclasses.replace(m, t=t / M, t_seconds=t, inputs=inputs))

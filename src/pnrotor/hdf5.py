@@ -26,7 +26,7 @@ every write and read of it:
   that host removes the temporary files of writers no longer alive.
 * Batch files hold one run per top-level group (`list_runs`). `batch(path)` is the way to write many runs:
   a context manager whose `Batch` adds each run (`Batch.add`, or `Batch.copy_from` another file, which reads the
-  run first and copies only one `read` accepts) to the
+  run first and copies only one `read` accepts, unless told the source is checked) to the
   temporary file, at the cost of that run alone, and renames the file into place on leaving the block
   without an exception. ``batch(path, append=True)`` adds runs to an existing batch file, which it copies
   to the temporary name once; ``write(..., group=NAME)`` adds one run that way, so each such call costs a
@@ -313,7 +313,8 @@ class Batch:
         name = group if name is None else name
         if verify:
             read(source, group)
-        with h5py.File(source, "r") as f:
+        with _open_file(source) as f:
+            _check_schema(f, source)
             run = _run_group(f, source, group)
             stored = []
             run.visititems(lambda _, item: stored.append(item.id.get_storage_size())
@@ -640,14 +641,25 @@ def _replacing(path, overwrite, copy=False, durable=True):
         if writeback:
             writeback.join()
         temporary.unlink(missing_ok=True)
-        code = re.search(r"errno = (\d+)", str(error)) if isinstance(error, (OSError, RuntimeError)) else None
-        if code:   # HDF5's report of a failed system call (a RuntimeError or OSError of many lines): one line
-            code = int(code.group(1))
+        code = _write_failure(error, temporary)
+        if code is not None:
             raise OSError(code, f"no space left on the device of {path.parent} while writing {path.name}"
                           if code == errno.ENOSPC else f"{os.strerror(code)} while writing {path}") from None
         raise
     if durable:
         _fsync(path.parent)
+
+
+def _write_failure(error, temporary):
+    """The errno of HDF5's report of a failed system call on the file being written, a RuntimeError or OSError of
+    many lines holding ``errno = N`` (a full disk, a file-size limit, a quota), or None: not for a report that
+    names another file (``name = '...'``: one the caller opened in the block, a missing source, say)."""
+    if not isinstance(error, (OSError, RuntimeError)):
+        return None
+    text = str(error)
+    code = re.search(r"errno = (\d+)", text)
+    others = [name for name in re.findall(r"name = '([^']*)'", text) if Path(name).name != temporary.name]
+    return int(code.group(1)) if code and not others else None
 
 
 class _Interrupts:
@@ -915,9 +927,8 @@ def _fsync(path, sync=os.fsync):
 # --------------------------------------------------------------------------------------------------
 
 
-@contextmanager
-def _open(path):
-    """Open a pnrotor file for reading, or raise the error that says what it is instead."""
+def _open_file(path):
+    """The HDF5 file `path` open for reading, or the error that says what it is instead."""
     path = Path(path)
     if path.is_dir():
         raise IsADirectoryError(f"{path} is a folder, not a pnrotor HDF5 file")
@@ -927,10 +938,16 @@ def _open(path):
         empty = " (it is empty)" if path.stat().st_size == 0 else ""
         raise ValueError(f"{path} is not an HDF5 file{empty}")
     try:
-        f = h5py.File(path, "r")
+        return h5py.File(path, "r")
     except OSError as error:
         raise ValueError(f"{path} is truncated or corrupt: HDF5 cannot open it ({error})") from None
-    with f:
+
+
+@contextmanager
+def _open(path):
+    """Open a pnrotor file for reading, or raise the error that says what it is instead; what HDF5 raises while
+    it is read becomes a ValueError naming the file."""
+    with _open_file(path) as f:
         try:
             _check_schema(f, path)
             yield f

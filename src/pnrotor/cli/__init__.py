@@ -49,12 +49,13 @@ def _rate(text):
 class _Parser(argparse.ArgumentParser):
     """argparse's parser, whose errors (an unknown option, a value of the wrong type) are one line on stderr
     and exit status 2, as every other error of the command line, not the usage block and then the error; and
-    which takes a negative number in exponent form (``--t-end -1e6``) or ``-inf`` as a value, where argparse
-    (through Python 3.12) takes only ``-5`` and ``-0.5`` and reads ``-1e6`` as an unknown option."""
+    which takes an argument starting as a negative number (``--t-end -1e6``, ``--chi1 -0.6,0,0.2``) or ``-inf``
+    as a value, where argparse of Python 3.11–3.13.0 takes only ``-5`` and ``-0.5`` whole and reads the others
+    as unknown options (later versions match such a prefix, ``-\\.?\\d``, too)."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$|^-inf$", re.IGNORECASE)
+        self._negative_number_matcher = re.compile(r"-\.?\d|-inf", re.IGNORECASE)   # re.match: a prefix
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")

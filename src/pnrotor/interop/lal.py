@@ -47,16 +47,18 @@ def spintaylor_orbit(*args, **kwargs):
 
 
 def _uniform_step(modes):
-    """Δt in s of modes sampled uniformly (``sampling=Δt``: that Δt exactly), else a ValueError: LAL's series
-    have one Δt."""
+    """Δt in s of modes sampled uniformly (``sampling=Δt``: that Δt exactly, if the times still have it), else a
+    ValueError: LAL's series have one Δt."""
     t = modes.t_seconds
     if t.size < 2:
         raise ValueError("LAL time series need at least 2 samples")
     dt = (t[-1] - t[0]) / (t.size - 1)
     # t = k Δt carries the rounding of its product (units of M times M in s), a few ulp of t: allowed too
-    if np.max(np.abs(np.diff(t) - dt)) > 1e-9 * dt + 8.0 * np.spacing(np.max(np.abs(t))):
+    tolerance = 1e-9 * dt + 8.0 * np.spacing(np.max(np.abs(t)))
+    if np.max(np.abs(np.diff(t) - dt)) > tolerance:
         raise ValueError("LAL time series need uniform samples: evolve with sampling=Δt (seconds)")
-    return float(modes.inputs["sampling_value"]) if modes.inputs.get("sampling") == "dt" else dt
+    asked = modes.inputs.get("sampling_value") if modes.inputs.get("sampling") == "dt" else None
+    return float(asked) if asked is not None and abs(asked - dt) <= tolerance else dt   # not if samples were taken out
 
 
 def _series(create, name, epoch, dt, unit, data):
