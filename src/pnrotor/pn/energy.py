@@ -37,7 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .series import assemble
+from .series import assemble, shape_of
 
 EULER_GAMMA = 0.57721566490153286061
 LN2 = math.log(2.0)
@@ -54,8 +54,8 @@ def nonspinning_energy_coefficients(nu):
 
     Blanchet, Living Rev. Rel. 17, 2 (2014), Eq. (233); x = v².
     """
-    e = np.zeros((10,) + np.shape(nu))
-    elog = np.zeros((10,) + np.shape(nu))
+    e = np.zeros((10,) + shape_of(nu))
+    elog = np.zeros((10,) + shape_of(nu))
     e[0] = 1.0
     # 1PN: −3/4 − ν/12                                          [Blanchet 2014, Eq. (233)]
     e[2] = -0.75 - nu / 12.0

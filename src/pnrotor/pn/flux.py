@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from .energy import EULER_GAMMA, LN2, PI2
-from .series import assemble
+from .series import assemble, shape_of
 
 PI = math.pi
 LN3 = math.log(3.0)
@@ -39,8 +39,8 @@ LN3 = math.log(3.0)
 def nonspinning_flux_coefficients(nu):
     """(f, flog): F̂ coefficients of v^k and of v^k ln v, nonspinning, through 4.5PN (for an array of ν, f[k]
     is an array like it)."""
-    f = np.zeros((10,) + np.shape(nu))
-    flog = np.zeros((10,) + np.shape(nu))
+    f = np.zeros((10,) + shape_of(nu))
+    flog = np.zeros((10,) + shape_of(nu))
     f[0] = 1.0
     # 1PN: −1247/336 − 35ν/12                                    [Blanchet 2014, Eq. (314)]
     f[2] = -1247.0 / 336.0 - 35.0 / 12.0 * nu

@@ -70,6 +70,12 @@ del _b
 MAX_ORDER = (NK - 1) / 2.0  # 4.5PN
 
 
+def shape_of(x):
+    """np.shape(x) of a float or an array, without making an array of a float (np.shape: ~1.4 µs, seven times in
+    one binary's set-up)."""
+    return x.shape if isinstance(x, np.ndarray) else ()
+
+
 def new_series(shape=()):
     """A zero series C[k, b, l], or one per binary, C[k, b, l, i] for the trailing ``shape`` (n,)."""
     return np.zeros((NK, NB, NL) + tuple(shape))
@@ -84,7 +90,7 @@ def assemble(X1, kappa1, kappa2, nonspinning, spin_orbit, spin_spin_per_body, sp
     functions are elementwise, so each binary's numbers are those of a scalar call."""
     X2 = 1.0 - X1
     nu = X1 * X2
-    C = new_series(np.shape(X1))
+    C = new_series(shape_of(X1))
     c, clog = nonspinning(nu)
     C[:, B_ONE, 0] = c
     C[:, B_ONE, 1] = clog

@@ -80,8 +80,12 @@ import math
 import numpy as np
 from numba import njit
 
-from .energy import energy_derivative_series
-from .series import SERIES_SLOTS, divide, eval_at, eval_series, fold_and_store, truncate, v_derivative
+from .energy import energy_derivative_series, energy_series
+from .flux import flux_series
+from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms, spin_orbit_precession,
+                         spin_spin_precession_2pn, spin_spin_precession_3pn, spin_spin_precession_3pn_instantaneous,
+                         varpi_coefficients)
+from .series import SERIES_SLOTS, divide, eval_at, eval_series, fold_and_store, shape_of, truncate, v_derivative
 
 # ---------------------------------------------------------------------------------------------------
 # state layout
@@ -415,9 +419,6 @@ APPROXIMANTS = ("T1", "T4", "T5")
 
 def vdot_series(X1, approximant, kmax, kappa1=1.0, kappa2=1.0):
     """(N, D, Ê′) series of v̇ = (32ν/5) v⁹ N/D for the approximant, truncated by ``kmax``."""
-    from .energy import energy_series
-    from .flux import flux_series
-
     if approximant not in APPROXIMANTS:
         raise ValueError(f"approximant must be one of {APPROXIMANTS}, got {approximant!r}")
     return _vdot_series(energy_series(X1, kappa1, kappa2), flux_series(X1, kappa1, kappa2), kmax,
@@ -487,7 +488,7 @@ def _spin_independent_parts(key):
     """:func:`spin_independent_parts` of one binary, ``key`` = (X1, approximant, kmax as a tuple, so_order,
     ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives other signed zeros), rotor, phase_shift,
     omega_l), as (p head, N, D, Ê′), kept in a small LRU cache (repeated runs of one binary, or of one mass
-    ratio, skip its ~50 µs of Python; code that replaces a coefficient function must call
+    ratio, skip its ~65 µs of Python; code that replaces a coefficient function must call
     ``_spin_independent_parts.cache_clear()``).  The arrays are shared: make_parameters copies the head and only
     reads the series."""
     X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, _, _, rotor, phase_shift, omega_l = key
@@ -501,17 +502,12 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     that share the options and differ in X1, κ₁, κ₂ (arrays (n,), or floats for one binary): (heads
     (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
     :func:`vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
-    binary, against ~50 µs of Python floats for one, measured).  The numbers are built with the binaries
+    binary, against ~65 µs of Python floats for one, measured; 85 µs before the imports left the function and
+    :func:`pnrotor.pn.series.shape_of` replaced np.shape).  The numbers are built with the binaries
     last (p[j] = x is then a row) and turned binaries-first at the end (only the head of p: with all of it
     transposed they took ~10 µs per binary).  Binary i gets bitwise the numbers of a
     call with its floats: the coefficient functions are elementwise and use only +, −, ×, / (powers are
     written as products, since numpy's x ** k is not libm's pow on every CPU)."""
-    from .energy import energy_series
-    from .flux import flux_series
-    from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms,
-                             spin_orbit_precession, spin_spin_precession_2pn, spin_spin_precession_3pn,
-                             spin_spin_precession_3pn_instantaneous, varpi_coefficients)
-
     if approximant not in APPROXIMANTS:
         raise ValueError(f"approximant must be one of {APPROXIMANTS}, got {approximant!r}")
     if rotor not in ("coprecessing", "orbital"):
@@ -525,7 +521,7 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
 
     X2 = 1.0 - X1
     nu = X1 * X2
-    p = np.zeros((P_NUM,) + np.shape(X1))    # p[j, i] of binary i
+    p = np.zeros((P_NUM,) + shape_of(X1))    # p[j, i] of binary i
     p[P_X1] = X1
     p[P_X2] = X2
     p[P_NU] = nu
@@ -553,7 +549,7 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     p[P_DEN_EPS] = DEN_EPS
     E, F = energy_series(X1, kappa1, kappa2), flux_series(X1, kappa1, kappa2)
     kmax, approx = np.array(kmax, dtype=np.int64), APPROXIMANTS.index(approximant)
-    if np.ndim(X1) == 0:   # one binary (evolve): _vdot_series_each would cost 3.5 s more to compile, cold
+    if not shape_of(X1):   # one binary (evolve): _vdot_series_each would cost 3.5 s more to compile, cold
         return (p[None],) + tuple(x[None] for x in _vdot_series(E, F, kmax, approx))
     E, F = (np.ascontiguousarray(np.moveaxis(x, -1, 0)) for x in (E, F))
     return (np.ascontiguousarray(p.T),) + _vdot_series_each(E, F, kmax, approx)

@@ -36,7 +36,7 @@ from numba import njit
 
 from pnrotor.quaternion import qrotate_into
 from pnrotor.waveform import nonspinning, spin
-from pnrotor.waveform.layout import ell_m, mode_index, n_modes
+from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.waveform.wigner import (_CHUNK, _phase_powers, _rotate_ell, _rotation_scratch, _rotor_block,
                                      _rotor_rows, _store, rotation_plan)
 
@@ -57,25 +57,31 @@ _FRAME_CODES = {"coorbital": 0, "z": 1, "rotors": 2}
 def table(nu, delta, ell_max, order2, spins):
     """(mode row, power k, quantity index, coefficient, parity) arrays of every term kept, m ≥ 0 (module
     docstring); ``spins`` False leaves the spin terms out."""
-    rows = []
     row_of = mode_index.py_func   # the plain Python function (a compiled call per term would cost ~1 µs)
+    rows = [(row_of(ell, m), k, q, c, parity) for ell, m, k, q, c, parity in _terms(nu, delta, ell_max, order2, spins)]
+    row, k, q, c, parity = zip(*rows) if rows else ((), (), (), (), ())
+    return (np.array(row, dtype=np.int64), np.array(k, dtype=np.int64), np.array(q, dtype=np.int64),
+            np.array(c, dtype=np.complex128), np.array(parity, dtype=np.int64))
 
-    def add(ell, m, k, q, c, parity):
-        if ell <= ell_max and k <= order2 and c != 0:
-            rows.append((row_of(ell, m), k, q, complex(c), parity))
 
+def _terms(nu, delta, ell_max, order2, spins):
+    """The terms of :func:`table` as a list of Python tuples (ℓ, m, k, q, complex coefficient, parity)."""
+    kept = []
     for (ell, m), series in nonspinning.terms(nu, delta).items():
-        for k, a, b in series:
-            add(ell, m, k, _Q_ONE, a, 1)
-            add(ell, m, k, _Q_LOG, b, 1)
+        if ell <= ell_max:
+            for k, a, b in series:
+                if k <= order2:
+                    if a != 0:
+                        kept.append((ell, m, k, _Q_ONE, complex(a), 1))
+                    if b != 0:
+                        kept.append((ell, m, k, _Q_LOG, complex(b), 1))
     if spins:
         symmetric, antisymmetric = spin.terms(nu, delta)
         for parity, group in ((1, symmetric), (-1, antisymmetric)):
             for ell, m, k, name, c in group:
-                add(ell, m, k, _Q_SPIN[name], c, parity)
-    row, k, q, c, parity = zip(*rows) if rows else ((), (), (), (), ())
-    return (np.array(row, dtype=np.int64), np.array(k, dtype=np.int64), np.array(q, dtype=np.int64),
-            np.array(c, dtype=np.complex128), np.array(parity, dtype=np.int64))
+                if ell <= ell_max and k <= order2 and c != 0:
+                    kept.append((ell, m, k, _Q_SPIN[name], complex(c), parity))
+    return kept
 
 
 @lru_cache(maxsize=64)
@@ -87,17 +93,17 @@ def _real_terms(nu, delta, ell_max, order2, spins, constants):
     which skip the columns m' where H_ℓ,±m' has no term (:func:`pnrotor.waveform.wigner.rotation_plan`).
     Cached: a run's modes computed again (another ℓ_max, frame or distance) skip these ~0.1–0.3 ms."""
     n_pow = 2 * ell_max + 1
-    labels = ell_m(ell_max)
     summed = {}
-    for row, k, q, c, parity in zip(*(column.tolist() for column in table(nu, delta, ell_max, order2, spins))):
-        ell, m = labels[row]
+    for ell, m, k, q, c, parity in _terms(nu, delta, ell_max, order2, spins):
         if constants is not None and q >= 2:
             c, q = c * constants[q], _Q_ONE
         r = ell + m if parity > 0 else ell - m
-        for part, value in ((0, c.real), (n_pow, c.imag)):
-            if value:
-                key = (ell, part + r, k, q)
-                summed[key] = summed.get(key, 0.0) + value
+        if c.real:
+            key = (ell, r, k, q)
+            summed[key] = summed.get(key, 0.0) + c.real
+        if c.imag:
+            key = (ell, n_pow + r, k, q)
+            summed[key] = summed.get(key, 0.0) + c.imag
     keys = sorted(key for key, value in summed.items() if value)
     ell, target, k, q = (np.array(column, dtype=np.int64).reshape(-1) for column in zip(*keys)) if keys else \
         (np.zeros(0, dtype=np.int64),) * 4
