@@ -197,8 +197,7 @@ class Plan:
             with open(self.parts / _LOCK, "a") as lock:
                 if not _flock(lock):
                     made = False
-                    raise FileExistsError(f"another batch is writing {self.path} (its runs are in {self.parts}); "
-                                          "wait for it to finish")
+                    raise _another_batch(self)
                 yield
         except BaseException:
             if made and self.parts.is_dir() and not any(self.parts.glob("run-*.h5")):
@@ -226,6 +225,12 @@ def _flock(file):
     except BlockingIOError:
         return False
     return True
+
+
+def _another_batch(plan):
+    """The error for a batch whose output another running batch writes (it holds the lock of its parts folder)."""
+    return FileExistsError(f"another batch is writing {plan.path} (its runs are in {plan.parts}); wait for it to "
+                           "finish")
 
 
 def _locked(parts):
@@ -268,8 +273,7 @@ def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compressi
     result = Plan(rows, path, jobs, scheduler, overwrite, dict(compression=compression, checksum=checksum),
                   create_folder, bool(resume), wave)
     if result.parts.exists() and _locked(result.parts):
-        raise FileExistsError(f"another batch is writing {result.path} (its runs are in {result.parts}); wait "
-                              "for it to finish")
+        raise _another_batch(result)
     if result.parts.exists() and not resume:
         raise FileExistsError(f"{result.parts} holds the finished runs of an interrupted batch: pass --resume "
                               "(resume=True) to complete it, or remove the folder")

@@ -122,6 +122,8 @@ def read_batch(path, cli_defaults):
         raise ValueError(f"batch file {path} must be .csv or .toml")
     if not records:
         raise ValueError(f"batch file {path} holds no binaries")
+    from pnrotor.hdf5 import _valid_name   # what can name a group (not at import: the CLI starts without h5py)
+
     rows = []
     for number, (label, record) in enumerate(records, 1):
         row = Row(number, label)
@@ -220,6 +222,8 @@ def _row_parameters(record, cli_defaults):
             params[key] = str(value)
         else:
             params[key] = _float(value, key)
+    from pnrotor.hdf5 import _valid_name
+
     name = record.get("name")
     if name is None:
         name = default_name(params)
@@ -228,11 +232,6 @@ def _row_parameters(record, cli_defaults):
     else:
         default_name(params)  # checks the approximant before the run
     return params, name
-
-
-def _valid_name(name):
-    """Whether a name column's value can name an HDF5 group: a non-empty string, no '/', not '.'."""
-    return isinstance(name, str) and name not in (".", "") and "/" not in name and "\x00" not in name
 
 
 def _float(value, key):

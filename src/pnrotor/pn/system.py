@@ -366,6 +366,13 @@ def rhs_precessing_instantaneous(t, y, p, dydt):
     dydt[Y_PHI] = v3
 
 
+@njit(inline="always")
+def vdot_peak(n, d, n_v, d_v):
+    """Event 6 from N, D of v̇ and vN′, vD′ at one v: 11ND + (vN′)D − N(vD′), the sign of ∂(v²v̇)/∂v (module
+    docstring); inlined where it is called, in the caller's floating-point mode."""
+    return 11.0 * n * d + n_v * d - n * d_v
+
+
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def events_precessing(t, y, p, g):
     """Event functions for the precessing state (module docstring)."""
@@ -381,7 +388,7 @@ def events_precessing(t, y, p, g):
     g[EV_SPIN1] = 1.0 + p[P_SPINTOL] - b[4]
     g[EV_SPIN2] = 1.0 + p[P_SPINTOL] - b[6]
     g[EV_POLE] = den - p[P_DEN_EPS]
-    g[EV_VDOT_PEAK] = 11.0 * num * den + num_v * den - num * den_v
+    g[EV_VDOT_PEAK] = vdot_peak(num, den, num_v, den_v)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -407,7 +414,7 @@ def events_aligned(t, y, p, g):
     g[EV_SPIN1] = 1.0
     g[EV_SPIN2] = 1.0
     g[EV_POLE] = den - p[P_DEN_EPS]
-    g[EV_VDOT_PEAK] = 11.0 * num * den + num_v * den - num * den_v
+    g[EV_VDOT_PEAK] = vdot_peak(num, den, num_v, den_v)
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -449,7 +456,7 @@ def _store_series(N, D, Ep, basis, fold, p, v0):
     fold_and_store(Ep, basis, fold, p, np.int64(P_EP))
     Nv, Dv = v_derivative(N), v_derivative(D)
     n0, d0 = eval_at(N, v0, basis), eval_at(D, v0, basis)
-    peak0 = 11.0 * n0 * d0 + eval_at(Nv, v0, basis) * d0 - n0 * eval_at(Dv, v0, basis)
+    peak0 = vdot_peak(n0, d0, eval_at(Nv, v0, basis), eval_at(Dv, v0, basis))
     return n0, d0, eval_at(Ep, v0, basis), peak0
 
 
@@ -582,7 +589,7 @@ def inspiral_end(X1, approximant, kmax, basis, kappa1=1.0, kappa2=1.0):
 
     def smallest(v):
         n, d = evaluate(N, v, basis), evaluate(D, v, basis)
-        peak = 11.0 * n * d + evaluate(Nv, v, basis) * d - n * evaluate(Dv, v, basis)
+        peak = vdot_peak.py_func(n, d, evaluate(Nv, v, basis), evaluate(Dv, v, basis))   # on arrays of v
         return np.minimum.reduce([evaluate(Ep, v, basis), n * d, d - DEN_EPS, peak])
 
     v = np.geomspace(1e-3, 1.0, 2000)
