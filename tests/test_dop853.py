@@ -342,6 +342,58 @@ def test_functions_by_address_give_the_same_run():
         dop853(by_address(never_modify, AFTER_STEP_SIG), 0.0, [1.0, 0.0], 10.0, atol=1e-12, args=[W])
 
 
+@njit(RHS_SIG, cache=True)
+def _raising_rhs(t, y, p, dydt):
+    if t > 1.0:
+        raise ValueError("rhs refused t > 1")
+    dydt[0] = y[1]
+    dydt[1] = -y[0]
+
+
+@njit(EVENTS_SIG, cache=True)
+def _raising_events(t, y, p, g):
+    if t > 2.0:
+        raise ValueError("events refused t > 2")
+    g[0] = 1.0
+
+
+@njit(AFTER_STEP_SIG, cache=True)
+def _raising_after_step(t, y, p):
+    if t > 3.0:
+        raise ValueError("after_step refused t > 3")
+    return False
+
+
+def test_exceptions_raised_by_a_users_functions_reach_the_caller():
+    """A dispatcher is called through its jit entry inside the core, so its exception propagates (with its
+    message) from dop853 and bulirsch_stoer alike; the same function by_address would not (documented)."""
+    from pnrotor.ode import bulirsch_stoer
+
+    with pytest.raises(ValueError, match="rhs refused t > 1"):
+        dop853(_raising_rhs, 0.0, [1.0, 0.0], 10.0, atol=1e-10)
+    with pytest.raises(ValueError, match="rhs refused t > 1"):
+        bulirsch_stoer(_raising_rhs, 0.0, [1.0, 0.0], 10.0, atol=1e-10)
+    with pytest.raises(ValueError, match="events refused t > 2"):
+        dop853(oscillator, 0.0, [1.0, 0.0], 10.0, atol=1e-10, args=[W], events=_raising_events, n_events=1)
+    with pytest.raises(ValueError, match="after_step refused t > 3"):
+        dop853(oscillator, 0.0, [1.0, 0.0], 10.0, atol=1e-10, args=[W], after_step=_raising_after_step)
+    with pytest.raises(ValueError, match="after_step refused t > 3"):
+        bulirsch_stoer(oscillator, 0.0, [1.0, 0.0], 10.0, atol=1e-10, args=[W], after_step=_raising_after_step)
+
+
+def test_a_cfunc_gives_the_same_run_and_its_signature_is_checked():
+    """A numba @cfunc of RHS_SIG integrates bitwise as the @njit function it wraps; of another signature it is refused."""
+    from numba import cfunc
+
+    c = cfunc(RHS_SIG)(oscillator.py_func)
+    a = dop853(oscillator, 0.0, [1.0, 0.0], 10.0, atol=1e-12, args=[W])
+    b = dop853(c, 0.0, [1.0, 0.0], 10.0, atol=1e-12, args=[W])
+    assert a.nfev == b.nfev
+    np.testing.assert_array_equal(a.y, b.y)
+    with pytest.raises(TypeError, match="rhs must have the signature"):
+        dop853(cfunc(AFTER_STEP_SIG)(never_modify.py_func), 0.0, [1.0, 0.0], 10.0, atol=1e-12, args=[W])
+
+
 def test_event_direction_and_zero_at_start():
     """Forward: g0 = cos(Wt) − ½ falls through 0 at acos(½)/W and rises at (2π − acos ½)/W;
     g1 = y' = −W sin(Wt) is exactly 0 at t0 (must not trigger), rises through 0 at π/W and falls

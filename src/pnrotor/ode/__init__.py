@@ -21,8 +21,8 @@ Right-hand sides and hooks are numba functions compiled with the exported signat
 
     res = dop853(rhs, 0.0, [1.0, 0.0], 10.0, atol=1e-10, args=[4.0])
 
-The driver loops take these functions as first-class function values with explicit signatures, so
-they are compiled once per machine (numba cache) and reused for every right-hand side.
+The driver loops take these functions by the addresses of their compiled code (signatures checked
+before), so they are compiled once per machine (numba cache) and reused for every right-hand side.
 """
 
 from .dop853 import (AFTER_STEP_SIG, EVENTS_SIG, RHS_SIG, by_address, dop853, no_after_step, no_events,

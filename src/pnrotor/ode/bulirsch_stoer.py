@@ -43,10 +43,10 @@ import math
 import numpy as np
 from numba import njit, types
 
-from .dop853 import (AFTER_STEP_TYPE, FV_H, FV_T, FV_TFAIL, IV_NACC, IV_NANREJ, IV_NFEV, IV_NMOD, IV_NOUT,
-                     IV_NREJ, IV_NSTEPS, IV_STATUS, OUT_FINAL, OUT_STEPS, OUT_TEVAL, RHS_TYPE, _A1, _A2, _I1,
-                     _all_finite, _append_row, _common_inputs, _entry_point, _f8, _i8, _result, _scaled,
-                     _trivial_result, select_initial_step)
+from .dop853 import (FV_H, FV_T, FV_TFAIL, IV_NACC, IV_NANREJ, IV_NFEV, IV_NMOD, IV_NOUT,
+                     IV_NREJ, IV_NSTEPS, IV_STATUS, OUT_FINAL, OUT_STEPS, OUT_TEVAL, _A1, _A2, _I1,
+                     _after_step_function, _all_finite, _append_row, _common_inputs, _entry_point, _f8,
+                     _function_addresses, _i8, _result, _rhs_function, _scaled, _trivial_result, select_initial_step)
 from .result import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_SUCCESS
 
 K_MAX_DEFAULT = 9
@@ -78,7 +78,7 @@ def _gragg(rhs, t, y, f0, h_step, nsub, p, za, zb, ftmp):
 
 
 _BS_SIG = types.Tuple((_A1, _A2, _I1, _A1))(
-    RHS_TYPE, AFTER_STEP_TYPE,
+    _I1,                         # functions: rhs, after_step (pnrotor.ode.dop853.FUNCTIONS_LAYOUT)
     _f8, _A1, _f8, _A1,          # t0, y0, t_end, p
     _A1, _A1,                    # atol, rtol
     _f8, _f8, _i8,               # first_step (0: automatic), max_step, max_steps
@@ -87,10 +87,12 @@ _BS_SIG = types.Tuple((_A1, _A2, _I1, _A1))(
 
 
 @njit(_BS_SIG, cache=True)
-def _bs_core(rhs, after_step, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps,
-             out_mode, kmax, k_init):
-    """The Bulirsch–Stoer driver loop.  Returns (t_out, y_out, ivals, fvals); the output buffers
-    are over-allocated, their used length is ivals[IV_NOUT]."""
+def _bs_core(functions, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps, out_mode, kmax, k_init):
+    """The Bulirsch–Stoer driver loop, its right-hand side and hook given by address (the first two of
+    ``FUNCTIONS_LAYOUT``).  Returns (t_out, y_out, ivals, fvals); the output buffers are over-allocated, their
+    used length is ivals[IV_NOUT]."""
+    rhs = _rhs_function(functions[0], functions[1])
+    after_step = _after_step_function(functions[2], functions[3])
     n = y0.size
     direction = 1.0 if t_end > t0 else -1.0
     nseq = np.empty(kmax, dtype=np.int64)
@@ -365,6 +367,7 @@ def bulirsch_stoer(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None,
     k_init = int(-math.log10(tol) * 0.6 + 1.5) - 1
     k_init = min(max(k_init, 1), int(k_max) - 2)
 
-    t_out, y_out, iv, fv = _entry_point(_bs_core, _BS_SIG)(c.rhs, c.after_step, c.t0, c.y0, c.t_end, c.p, c.atol, c.rtol,
-                                                  c.first_step, c.max_step, c.max_steps, c.mode, int(k_max), k_init)
+    t_out, y_out, iv, fv = _entry_point(_bs_core, _BS_SIG)(
+        _function_addresses(c.rhs, c.after_step), c.t0, c.y0, c.t_end, c.p, c.atol, c.rtol, c.first_step, c.max_step,
+        c.max_steps, c.mode, int(k_max), k_init)
     return _result(t_out, y_out, iv, fv, "Bulirsch-Stoer")

@@ -43,12 +43,12 @@ Floating point: the stage and interpolation sums are compiled with ``fastmath={'
 LLVM may fuse a·b + c into one FMA instruction (halves the arithmetic of a step; results then differ
 from an unfused evaluation by rounding only).  No other fast-math flag is used.
 
-Function types: the core takes the right-hand side and hooks as first-class
-``numba.types.FunctionType`` values with the explicit signatures below; numba caches such a driver
-across processes (a driver taking a dispatcher or closure is recompiled in every process).  An
-indirect call of a no-op right-hand side with its three array arguments measured ~6 ns here.
-Calling :func:`dop853` has a fixed cost of ~0.1 ms (argument checks and unboxing the function
-arguments), see ``benchmarks/bench_ode.py``.
+Function types: the core takes the right-hand side and hooks by the addresses of their compiled code
+(one int64 array, ``FUNCTIONS_LAYOUT``), checked against the explicit signatures below before the call, and
+calls them inside as first-class ``numba.types.FunctionType`` values; numba caches such a driver across
+processes (a driver taking a dispatcher or closure is recompiled in every process).  An indirect call of a
+no-op right-hand side with its three array arguments measured ~6 ns here.  Calling :func:`dop853` has a
+fixed cost of ~0.1 ms (argument checks), see ``benchmarks/bench_ode.py``.
 """
 
 import math
@@ -57,6 +57,9 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit, types
+from numba.core import cgutils
+from numba.core.ccallback import CFunc
+from numba.extending import intrinsic
 from numba.core.registry import CPUDispatcher
 
 from . import tableau as _tab
@@ -76,9 +79,6 @@ AFTER_STEP_SIG = types.boolean(types.float64, types.float64[::1], types.float64[
 EVENTS_SIG = types.void(types.float64, types.float64[::1], types.float64[::1], types.float64[::1])
 """``events(t, y, p, g)``: fill g[0..m-1] with the m event functions at (t, y)."""
 
-RHS_TYPE = types.FunctionType(RHS_SIG)
-AFTER_STEP_TYPE = types.FunctionType(AFTER_STEP_SIG)
-EVENTS_TYPE = types.FunctionType(EVENTS_SIG)
 
 _f8 = types.float64
 _i8 = types.int64
@@ -114,29 +114,52 @@ def no_events(t, y, p, g):
 # calling the cores cheaply
 # --------------------------------------------------------------------------------------------------
 #
-# Passing a numba dispatcher where a FunctionType is expected costs ~0.1 ms per call of the core:
-# the dispatcher resolves the Dispatcher -> FunctionType conversion, and unboxing looks up two
-# addresses per function argument.  For functions that can never raise (the built-in no-op hooks,
-# the PN system's right-hand sides) `by_address` gives an object implementing numba's
-# wrapper-address protocol with the address looked up once (the call then goes through the
-# function's C wrapper); user functions are passed as dispatchers so that exceptions they raise
-# propagate.  The cores are called through their compiled entry point (all arguments are prepared
-# with exactly the declared types), falling back to the dispatcher.
+# The cores take their functions as one int64 array of addresses, FUNCTIONS_LAYOUT, and turn each pair into
+# a first-class function inside (`_function_of`).  Declared as FunctionType arguments instead, every call
+# of a core from Python unboxed each function through numba's Python helpers (a module import, two
+# unpickled signatures and two Python calls per function): ~17-21 µs per call for three functions, against
+# ~0.7 µs for the address array (measured with a one-evaluation driver of either form).
+
+
+def _function_of(sig):
+    """A numba intrinsic ``(c_addr, jit_addr) -> FunctionType(sig)``: the first-class function whose cfunc
+    wrapper is at ``c_addr`` and whose numba-ABI entry is at ``jit_addr`` (0 for none).  numba calls
+    ``jit_addr`` when it is set (exceptions raised inside propagate to the caller), else ``c_addr``
+    (``numba.core.lowering``, first-class function calls); the Python object slot stays null."""
+    fty = types.FunctionType(sig)
+
+    @intrinsic
+    def function(typingctx, c_addr, jit_addr):
+        def codegen(context, builder, signature, args):
+            f = cgutils.create_struct_proxy(fty)(context, builder)   # zero-filled: py_addr null
+            ptr = context.get_value_type(types.voidptr)
+            f.c_addr = builder.inttoptr(args[0], ptr)
+            f.jit_addr = builder.inttoptr(args[1], ptr)
+            return f._getvalue()
+
+        return fty(types.int64, types.int64), codegen
+
+    return function
+
+
+_rhs_function = _function_of(RHS_SIG)
+_after_step_function = _function_of(AFTER_STEP_SIG)
+_events_function = _function_of(EVENTS_SIG)
+FUNCTIONS_LAYOUT = ("rhs", "after_step", "events")
+"""The cores' ``functions`` argument: for each of these in turn, its (cfunc wrapper, jit entry or 0) addresses."""
 
 
 class _FunctionAddress:
-    """A compiled numba function given to a core by address (numba's ``__wrapper_address__``)."""
+    """A compiled numba function as the cores take it: its addresses (:func:`_function_of`), looked up once,
+    and the function itself, which keeps the compiled code alive.  ``raises``: keep the jit entry, so
+    that an exception raised inside reaches the caller; without it the call goes through the cfunc wrapper."""
 
-    def __init__(self, dispatcher, sig):
-        from numba.experimental.function_type import _get_wrapper_address
+    def __init__(self, f, sig, raises):
+        from numba.experimental.function_type import _get_jit_address, _get_wrapper_address
 
-        self._dispatcher = dispatcher  # keeps the compiled code alive
-        self._address = _get_wrapper_address(dispatcher, sig)
+        self._function = f
         self._sig = sig
-        self._numba_type_ = types.FunctionType(sig)
-
-    def __wrapper_address__(self):
-        return self._address
+        self.addresses = (_get_wrapper_address(f, sig), _get_jit_address(f, sig) if raises else 0)
 
 
 _BY_ADDRESS = {}
@@ -144,22 +167,22 @@ _BY_ADDRESS = {}
 
 def by_address(f, sig):
     """The ``@njit`` function ``f`` with signature ``sig`` in its cheapest form for :func:`dop853` and
-    :func:`~pnrotor.ode.bulirsch_stoer`: its compiled address, looked up once.  A dispatcher costs
-    ~0.02–0.04 ms per function and call to unbox (PN runs of 0.4–1.8 ms took 0.04–0.08 ms less with both
-    of their functions passed this way, measured).  Only for functions that cannot raise (no ``raise``, and
-    ``error_model='numpy'`` so that a division by zero gives inf or nan): an exception inside would
-    not reach the caller."""
+    :func:`~pnrotor.ode.bulirsch_stoer`: its compiled address, looked up once (a dispatcher is checked and
+    looked up again on each call: ~0.02-0.04 ms per function, measured on PN runs of 0.4-1.8 ms).  Only for
+    functions that cannot raise (no ``raise``, and ``error_model='numpy'`` so that a division by zero gives
+    inf or nan): the call goes through the cfunc wrapper, so an exception inside would not reach the caller."""
     # keyed by id(sig): hashing a numba signature costs ~1.3 µs (the lookup now 0.15 µs); the entry keeps sig
     # alive, so its id is not reused
     key = (f, id(sig))
     entry = _BY_ADDRESS.get(key)
     if entry is None:
-        try:
-            h = _FunctionAddress(f, sig)
-        except Exception:  # pragma: no cover - numba internals changed: use the dispatcher
-            h = f
-        entry = _BY_ADDRESS[key] = (sig, h)
+        entry = _BY_ADDRESS[key] = (sig, _FunctionAddress(f, sig, raises=False))
     return entry[1]
+
+
+def _function_addresses(*functions):
+    """The cores' ``functions`` array (FUNCTIONS_LAYOUT) of :class:`_FunctionAddress` values."""
+    return np.array([a for f in functions for a in f.addresses], dtype=np.int64)
 
 
 def _default_hook(name):
@@ -522,7 +545,7 @@ def _locate_root(events, p, j, ta, tb, ga, gb, t_old, h, rc, yint, gtmp):
 
 
 _CORE_SIG = types.Tuple((_A1, _A2, _A1, _A1, _A3, _I1, _A1, _A1))(
-    RHS_TYPE, AFTER_STEP_TYPE, EVENTS_TYPE,
+    _I1,                         # functions (FUNCTIONS_LAYOUT)
     _f8, _A1, _f8, _A1,          # t0, y0, t_end, p
     _A1, _A1,                    # atol, rtol (per component)
     _f8, _f8, _i8,               # first_step (0: automatic), max_step, max_steps
@@ -533,12 +556,14 @@ _CORE_SIG = types.Tuple((_A1, _A2, _A1, _A1, _A3, _I1, _A1, _A1))(
 
 
 @njit(cache=True)   # compiled for _CORE_SIG by _entry_point when first needed, not at import
-def _dop853_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_step, max_step,
-                 max_steps, t_eval, out_mode, want_dense, n_events, ev_dir, safety, min_factor,
-                 max_factor):
-    """The DOP853 driver loop.  Returns (t_out, y_out, seg_t, seg_h, seg_coef, ivals, fvals, y_event);
-    the output and dense buffers are over-allocated, their used lengths are ivals[IV_NOUT],
-    ivals[IV_NSEG]."""
+def _dop853_core(functions, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps, t_eval, out_mode,
+                 want_dense, n_events, ev_dir, safety, min_factor, max_factor):
+    """The DOP853 driver loop, with its right-hand side and hooks given by address (FUNCTIONS_LAYOUT).
+    Returns (t_out, y_out, seg_t, seg_h, seg_coef, ivals, fvals, y_event); the output and dense buffers are
+    over-allocated, their used lengths are ivals[IV_NOUT], ivals[IV_NSEG]."""
+    rhs = _rhs_function(functions[0], functions[1])
+    after_step = _after_step_function(functions[2], functions[3])
+    events = _events_function(functions[4], functions[5])
     n = y0.size
     direction = 1.0 if t_end > t0 else -1.0
     K = np.empty((16, n))
@@ -902,25 +927,28 @@ _CHECKED = weakref.WeakKeyDictionary()  # dispatcher -> names of the signatures 
 
 
 def _jit_function(f, sig, name):
-    """Check that f can be passed where a FunctionType of signature ``sig`` is expected."""
+    """f checked for a core's argument ``name`` of signature ``sig`` → its :class:`_FunctionAddress` (a
+    dispatcher's keeps its jit entry: exceptions it raises propagate)."""
     if isinstance(f, CPUDispatcher):
         try:
-            if name in _CHECKED.get(f, ()):
-                return f
+            checked = name in _CHECKED.get(f, ())
         except TypeError:  # pragma: no cover - not weak-referenceable
-            pass
-        _check_dispatcher(f, sig, name)
-        try:
-            _CHECKED.setdefault(f, set()).add(name)
-        except TypeError:  # pragma: no cover
-            pass
-        return f
-    if hasattr(f, "_numba_type_") and hasattr(f, "address"):  # a numba @cfunc
-        return f
+            checked = False
+        if not checked:
+            _check_dispatcher(f, sig, name)
+            try:
+                _CHECKED.setdefault(f, set()).add(name)
+            except TypeError:  # pragma: no cover
+                pass
+        return _FunctionAddress(f, sig, raises=True)
+    if isinstance(f, CFunc):
+        if f._sig != sig:
+            raise TypeError(f"{name} must have the signature {sig}; got a @cfunc of signature {f._sig}")
+        return _FunctionAddress(f, sig, raises=False)
     if isinstance(f, _FunctionAddress):
-        # the identity test spares building and comparing a FunctionType (~5 µs) in the usual case
-        if f._sig is not sig and f._numba_type_ != types.FunctionType(sig):
-            raise TypeError(f"{name} must have the signature {sig}; got a function of type {f._numba_type_}")
+        # the identity test spares comparing signatures (~1 µs) in the usual case
+        if f._sig is not sig and f._sig != sig:
+            raise TypeError(f"{name} must have the signature {sig}; got a function of signature {f._sig}")
         return f
     raise TypeError(f"{name} must be a numba-compiled function, e.g. decorated with "
                     f"@njit(pnrotor.ode.{_SIG_NAMES[name]}, cache=True); got {type(f).__name__}")
@@ -1151,7 +1179,7 @@ def _integrate(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_step
     :class:`OdeResult`.  :func:`pnrotor.pn.evolve.integrate_half` calls it directly with inputs its settings
     stage has checked, which saves the 20–40 µs of :func:`dop853`'s validation per half (measured)."""
     t_out, y_out, seg_t, seg_h, seg_c, iv, fv, y_ev = _entry_point(_dop853_core, _CORE_SIG)(
-        rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps, t_eval, mode,
+        _function_addresses(rhs, after_step, events), t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps, t_eval, mode,
         dense, n_events, ev_dir, safety, min_factor, max_factor)
     nseg = int(iv[IV_NSEG])
     dense_out = None

@@ -43,7 +43,8 @@ from numba import njit, prange
 from .. import numba_cache
 from ..ode import AFTER_STEP_SIG, by_address
 from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
-                          STATUS_EVENT, _crossed, _dop853_core, _locate_root, no_after_step)
+                          STATUS_EVENT, _crossed, _dop853_core, _events_function, _function_addresses, _locate_root,
+                          no_after_step)
 from ..ode.result import contd8
 from . import initial as _ini
 from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _tolerances, build_system, half, population_parts,
@@ -104,10 +105,11 @@ class Population:
 
 
 @njit(parallel=True, cache=True)
-def _integrate_all(rhs, after_step, events, Y0, P, t_end, directions, atol, rtol, max_steps, safety,
+def _integrate_all(functions, Y0, P, t_end, directions, atol, rtol, max_steps, safety,
                    min_factor, max_factor, mode, R0, ell0, c1, c2, rows, near_v, near_rows, t, v, Phi, chi1, chi2,
                    R, ell, counts, no_t, out_mode):
-    """Half k of the group (state Y0[k], parameters P[k]) integrated to its end; its final state into row
+    """Half k of the group (state Y0[k], parameters P[k]) integrated by the DOP853 core with ``functions``
+    (:data:`pnrotor.ode.dop853.FUNCTIONS_LAYOUT`) to its end; its final state into row
     rows[k] of the outputs (t, v, …, ℓ̂) and (status, event index, step attempts, evaluations) into
     counts[rows[k]]; the states at the nearer targets v = near_v[k, j] into the rows near_rows[k, j] (−1:
     none), by :func:`_nearer_targets` on the dense output, computed only for halves that have them.  ``no_t``
@@ -115,10 +117,11 @@ def _integrate_all(rhs, after_step, events, Y0, P, t_end, directions, atol, rtol
     called with the types of its one signature (written as a constant here, numba compiled a second core,
     ~7 s)."""
     n_events = directions.shape[1]
+    events = _events_function(functions[4], functions[5])
     for k in prange(Y0.shape[0]):
         want_dense = near_rows.shape[1] > 0 and near_rows[k, 0] >= 0
         t_out, y_out, seg_t, seg_h, seg_c, iv, fv, _ = _dop853_core(
-            rhs, after_step, events, 0.0, Y0[k], t_end[k], P[k], atol, rtol, 0.0, np.inf, max_steps, no_t,
+            functions, 0.0, Y0[k], t_end[k], P[k], atol, rtol, 0.0, np.inf, max_steps, no_t,
             out_mode, want_dense, n_events, directions[k], safety, min_factor, max_factor)
         last = iv[IV_NOUT] - 1
         final = y_out[last:last + 1]
@@ -243,7 +246,7 @@ def _integrate_groups(groups, atol, rtol, max_steps, out, counts):
         for j, x in enumerate(nearer):
             for q, (vk, r) in enumerate(x):
                 near_vk[j, q], near_r[j, q] = vk, r
-        args = (rhs, after_step, events, np.array(y0), np.array(p), np.array(t_end), np.array(directions),
+        args = (_function_addresses(rhs, after_step, events), np.array(y0), np.array(p), np.array(t_end), np.array(directions),
                 atol_a, rtol_a, max_steps, *_CONTROLLER, mode, np.array([s.R0 for s in ss]),
                 np.array([s.ell_hat for s in ss]), np.array([s.chi1 for s in ss]), np.array([s.chi2 for s in ss]),
                 np.array(rows, dtype=np.int64), near_vk, near_r, out.t, out.v, out.Phi, out.chi1, out.chi2, out.R,
