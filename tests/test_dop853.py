@@ -381,6 +381,24 @@ def test_exceptions_raised_by_a_users_functions_reach_the_caller():
         bulirsch_stoer(oscillator, 0.0, [1.0, 0.0], 10.0, atol=1e-10, args=[W], after_step=_raising_after_step)
 
 
+def test_a_recompiled_dispatcher_is_looked_up_again():
+    """The addresses of a dispatcher are cached with its overload: after recompile() (new code, the old may be
+    freed) a run uses the new overload's and gives the same result."""
+    @njit(RHS_SIG)
+    def rhs(t, y, p, dydt):
+        dydt[0] = y[1]
+        dydt[1] = -p[0] * y[0]
+
+    from pnrotor.ode.dop853 import _CHECKED
+
+    a = dop853(rhs, 0.0, [1.0, 0.0], 10.0, atol=1e-12, args=[W])
+    first = _CHECKED[rhs]["rhs"]
+    rhs.recompile()
+    b = dop853(rhs, 0.0, [1.0, 0.0], 10.0, atol=1e-12, args=[W])
+    assert _CHECKED[rhs]["rhs"][0] is rhs.overloads[tuple(RHS_SIG.args)] is not first[0]
+    np.testing.assert_array_equal(a.y, b.y)
+
+
 def test_a_cfunc_gives_the_same_run_and_its_signature_is_checked():
     """A numba @cfunc of RHS_SIG integrates bitwise as the @njit function it wraps; of another signature it is refused."""
     from numba import cfunc

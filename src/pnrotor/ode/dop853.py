@@ -150,16 +150,21 @@ FUNCTIONS_LAYOUT = ("rhs", "after_step", "events")
 
 
 class _FunctionAddress:
-    """A compiled numba function as the cores take it: its addresses (:func:`_function_of`), looked up once,
-    and the function itself, which keeps the compiled code alive.  ``raises``: keep the jit entry, so
-    that an exception raised inside reaches the caller; without it the call goes through the cfunc wrapper."""
+    """A compiled numba function as the cores take it: its ``addresses`` (:func:`_function_of`, from
+    :func:`_addresses`) and the function itself, which keeps the compiled code alive during a call."""
 
-    def __init__(self, f, sig, raises):
-        from numba.experimental.function_type import _get_jit_address, _get_wrapper_address
-
+    def __init__(self, f, sig, addresses):
         self._function = f
         self._sig = sig
-        self.addresses = (_get_wrapper_address(f, sig), _get_jit_address(f, sig) if raises else 0)
+        self.addresses = addresses
+
+
+def _addresses(f, sig, raises):
+    """(cfunc wrapper address, jit entry address or 0) of f compiled for sig; ``raises``: keep the jit entry, so
+    that an exception raised inside reaches the caller (without it the call goes through the cfunc wrapper)."""
+    from numba.experimental.function_type import _get_jit_address, _get_wrapper_address
+
+    return _get_wrapper_address(f, sig), _get_jit_address(f, sig) if raises else 0
 
 
 _BY_ADDRESS = {}
@@ -167,8 +172,8 @@ _BY_ADDRESS = {}
 
 def by_address(f, sig):
     """The ``@njit`` function ``f`` with signature ``sig`` in its cheapest form for :func:`dop853` and
-    :func:`~pnrotor.ode.bulirsch_stoer`: its compiled address, looked up once (a dispatcher is checked and
-    looked up again on each call: ~0.02-0.04 ms per function, measured on PN runs of 0.4-1.8 ms).  Only for
+    :func:`~pnrotor.ode.bulirsch_stoer`: its compiled address, looked up once (a dispatcher costs 5-13 µs more per
+    call, its checks and cached addresses: dop853 on a short oscillator run 57-65 µs against 51-52).  Only for
     functions that cannot raise (no ``raise``, and ``error_model='numpy'`` so that a division by zero gives
     inf or nan): the call goes through the cfunc wrapper, so an exception inside would not reach the caller."""
     # keyed by id(sig): hashing a numba signature costs ~1.3 µs (the lookup now 0.15 µs); the entry keeps sig
@@ -176,7 +181,7 @@ def by_address(f, sig):
     key = (f, id(sig))
     entry = _BY_ADDRESS.get(key)
     if entry is None:
-        entry = _BY_ADDRESS[key] = (sig, _FunctionAddress(f, sig, raises=False))
+        entry = _BY_ADDRESS[key] = (sig, _FunctionAddress(f, sig, _addresses(f, sig, raises=False)))
     return entry[1]
 
 
@@ -923,7 +928,9 @@ def _validate_t_eval(t_eval, t0, t_end):
     return OUT_TEVAL, te
 
 
-_CHECKED = weakref.WeakKeyDictionary()  # dispatcher -> names of the signatures it was checked for
+_CHECKED = weakref.WeakKeyDictionary()
+"""dispatcher -> {argument name: (its overload for that signature, its addresses)}: looking the addresses up costs
+~50 µs (measured), the overload's identity test ~1 µs; a recompiled dispatcher has a new overload."""
 
 
 def _jit_function(f, sig, name):
@@ -931,20 +938,21 @@ def _jit_function(f, sig, name):
     dispatcher's keeps its jit entry: exceptions it raises propagate)."""
     if isinstance(f, CPUDispatcher):
         try:
-            checked = name in _CHECKED.get(f, ())
+            known = _CHECKED.get(f, {}).get(name)
         except TypeError:  # pragma: no cover - not weak-referenceable
-            checked = False
-        if not checked:
+            known = None
+        if known is None or f.overloads.get(tuple(sig.args)) is not known[0]:
             _check_dispatcher(f, sig, name)
+            known = (f.overloads[tuple(sig.args)], _addresses(f, sig, raises=True))
             try:
-                _CHECKED.setdefault(f, set()).add(name)
+                _CHECKED.setdefault(f, {})[name] = known
             except TypeError:  # pragma: no cover
                 pass
-        return _FunctionAddress(f, sig, raises=True)
+        return _FunctionAddress(f, sig, known[1])
     if isinstance(f, CFunc):
         if f._sig != sig:
             raise TypeError(f"{name} must have the signature {sig}; got a @cfunc of signature {f._sig}")
-        return _FunctionAddress(f, sig, raises=False)
+        return _FunctionAddress(f, sig, _addresses(f, sig, raises=False))
     if isinstance(f, _FunctionAddress):
         # the identity test spares comparing signatures (~1 µs) in the usual case
         if f._sig is not sig and f._sig != sig:
