@@ -168,11 +168,8 @@ def check_arguments(ell_max, amplitude_order, distance=None):
     naming the first bad one (callers check before computing a run)."""
     if not (_integer(ell_max) and 2 <= ell_max <= ELL_MAX):
         raise ValueError(f"ell_max must be an integer from 2 to {ELL_MAX}; got {ell_max!r}")
-    try:
-        order2 = 2.0 * float(amplitude_order)
-    except (TypeError, ValueError):
-        order2 = np.nan
-    if isinstance(amplitude_order, bool) or not (order2 in range(8)):
+    order2 = 2.0 * float(amplitude_order) if _real(amplitude_order) else math.nan   # no str, bytes or bools
+    if not order2 in range(8):
         raise ValueError(f"amplitude_order must be one of 0, 0.5, ..., 3.5; got {amplitude_order!r}")
     return int(ell_max), int(order2), None if distance is None else _megaparsecs(distance)
 

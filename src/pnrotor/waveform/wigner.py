@@ -69,7 +69,10 @@ from pnrotor.waveform.layout import mode_index, n_modes
 
 __all__ = ["d_half_pi", "rotation_plan", "wigner_D", "rotate_modes"]
 
-_TINY = 1e-300
+_TINY2 = 1e-280
+"""|R_a|², |R_b|² at or below this fraction of |R|² count as zero: above it they are normal numbers, so their square
+roots, and the unit phases formed with them, are exact to rounding (at ~1e-160 of |R| the squares are subnormal,
+the phases were off by up to 4e-5: a review's finding)."""
 
 
 @lru_cache(maxsize=None)
@@ -213,9 +216,9 @@ def _rotor_block(R, i0, nb, q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im):
         a, b = np.sqrt(a2), np.sqrt(b2)
         n = 1.0 / (a2 + b2)   # e^{iβ} = (|R_a| + i |R_b|)² / |R|²
         eb_re[1, s], eb_im[1, s] = (a2 - b2) * n, 2.0 * a * b * n
-        if not a > _TINY:   # R_a = w + i z → 1 where it vanishes: any unit phase serves (module docstring)
-            w, z, a = 1.0, 0.0, 1.0
-        if not b > _TINY:   # R_b = y − i x → 1
+        if not a2 > _TINY2 * (a2 + b2):   # R_a = w + i z → 1 where it vanishes: any unit phase serves (module
+            w, z, a = 1.0, 0.0, 1.0       # docstring; its terms are O(|R_a|) ≤ 1e-140 of the others)
+        if not b2 > _TINY2 * (a2 + b2):   # R_b = y − i x → 1
             y, x, b = 1.0, 0.0, 1.0
         n = 1.0 / (a * b)   # −i e^{−iα} = −i conj(R_a R_b) / (|R_a| |R_b|), i e^{−iγ} = i conj(R_a) R_b / (|R_a| |R_b|)
         ea_re[1, s], ea_im[1, s] = (w * x - z * y) * n, -(w * y + z * x) * n
