@@ -146,7 +146,7 @@ def bench_vs_scipy(name, rhs, y0, T, tol, exact, repeat):
     err_s = np.max(np.abs(s.y[:, -1] - ref))
     err_o = np.max(np.abs(r.y[-1] - ref))
     n_s = (s.nfev - 2) // 12
-    # fixed cost of one call (argument checks, unboxing the three function arguments): a run of
+    # fixed cost of one call (argument checks, the functions' addresses): a run of
     # one step; per-step cost from the difference of two run lengths (cancels the fixed cost);
     # bare RHS cost in the same rounds, same number of evaluations as our integration
     tiny = lambda: dop853(rhs, 0.0, y0, 1e-3 * h0, atol=tol, rtol=tol, first_step=1e-3 * h0, t_eval="final",
@@ -172,7 +172,7 @@ def bench_vs_scipy(name, rhs, y0, T, tol, exact, repeat):
           f"{'yes' if s.nfev == r.nfev + r.nrejected + 1 else 'NO'}")
     print(f"wall-time ratio scipy / ours (final-state output): {ts / to:8.1f}x ; per RHS evaluation: "
           f"{(ts / s.nfev) / (to / r.nfev):8.1f}x")
-    print(f"fixed cost per dop853() call (validation + unboxing 3 numba functions), from a 1-step run: "
+    print(f"fixed cost per dop853() call (validation, the functions' addresses), from a 1-step run: "
           f"{t_fixed * 1e6:7.1f} us (included in the wall times above)")
     print(f"bare RHS (numba, dependent chain of FunctionType calls): {per_eval_bare * 1e9:7.1f} ns/eval; "
           f"12 evals = {per_step_bare12 * 1e9:7.1f} ns")

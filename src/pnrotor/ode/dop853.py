@@ -48,7 +48,8 @@ Function types: the core takes the right-hand side and hooks by the addresses of
 calls them inside as first-class ``numba.types.FunctionType`` values; numba caches such a driver across
 processes (a driver taking a dispatcher or closure is recompiled in every process).  An indirect call of a
 no-op right-hand side with its three array arguments measured ~6 ns here.  Calling :func:`dop853` has a
-fixed cost of ~0.1 ms (argument checks), see ``benchmarks/bench_ode.py``.
+fixed cost of ~0.05 ms (argument checks; a short oscillator run 48-52 µs with its right-hand side
+by address, 57-65 µs as a dispatcher, measured), see ``benchmarks/bench_ode.py``.
 """
 
 import math
@@ -175,12 +176,17 @@ def by_address(f, sig):
     :func:`~pnrotor.ode.bulirsch_stoer`: its compiled address, looked up once (a dispatcher costs 5-13 µs more per
     call, its checks and cached addresses: dop853 on a short oscillator run 57-65 µs against 51-52).  Only for
     functions that cannot raise (no ``raise``, and ``error_model='numpy'`` so that a division by zero gives
-    inf or nan): the call goes through the cfunc wrapper, so an exception inside would not reach the caller."""
+    inf or nan): the call goes through the cfunc wrapper, so an exception inside would not reach the caller.
+    The address is the code compiled when ``by_address`` first saw ``f``: after ``f.recompile()`` it still runs that
+    code (numba keeps it), where ``f`` itself would run the new one."""
     # keyed by id(sig): hashing a numba signature costs ~1.3 µs (the lookup now 0.15 µs); the entry keeps sig
     # alive, so its id is not reused
     key = (f, id(sig))
     entry = _BY_ADDRESS.get(key)
     if entry is None:
+        if not isinstance(f, CPUDispatcher):
+            raise TypeError(f"by_address takes an @njit function, got {type(f).__name__}")
+        _check_dispatcher(f, sig, "by_address's function")
         entry = _BY_ADDRESS[key] = (sig, _FunctionAddress(f, sig, _addresses(f, sig, raises=False)))
     return entry[1]
 
@@ -949,10 +955,9 @@ def _jit_function(f, sig, name):
             except TypeError:  # pragma: no cover
                 pass
         return _FunctionAddress(f, sig, known[1])
-    if isinstance(f, CFunc):
-        if f._sig != sig:
-            raise TypeError(f"{name} must have the signature {sig}; got a @cfunc of signature {f._sig}")
-        return _FunctionAddress(f, sig, _addresses(f, sig, raises=False))
+    if isinstance(f, CFunc):   # its C wrapper prints an exception raised inside and returns: a wrong run, not an error
+        raise TypeError(f"{name} must be an @njit function, not a @cfunc (an exception raised inside a @cfunc cannot "
+                        f"reach the caller); use @njit(pnrotor.ode.{_SIG_NAMES[name]}, cache=True)")
     if isinstance(f, _FunctionAddress):
         # the identity test spares comparing signatures (~1 µs) in the usual case
         if f._sig is not sig and f._sig != sig:
@@ -969,14 +974,20 @@ def _check_dispatcher(f, sig, name):
         if existing.signature.return_type != sig.return_type:
             raise TypeError(
                 f"{name} must return {sig.return_type} (signature {sig}), but it returns "
-                f"{existing.signature.return_type}; compile it with @njit(pnrotor.ode.{_SIG_NAMES[name]})")
+                f"{existing.signature.return_type}; compile it with @njit({_sig_label(sig)})")
         return
     try:
         f.compile(sig)
     except Exception as exc:
         raise TypeError(
             f"{name} must be a numba @njit function compilable with the signature {sig} "
-            f"(e.g. @njit(pnrotor.ode.{_SIG_NAMES[name]}, cache=True)): {exc}") from None
+            f"(e.g. @njit({_sig_label(sig)}, cache=True)): {exc}") from None
+
+
+def _sig_label(sig):
+    """How to write ``sig`` in a decorator: its public name if it is one of the three, else itself."""
+    return {id(RHS_SIG): "pnrotor.ode.RHS_SIG", id(AFTER_STEP_SIG): "pnrotor.ode.AFTER_STEP_SIG",
+            id(EVENTS_SIG): "pnrotor.ode.EVENTS_SIG"}.get(id(sig), f"'{sig}'")
 
 
 _SIG_NAMES = {"rhs": "RHS_SIG", "after_step": "AFTER_STEP_SIG", "events": "EVENTS_SIG"}

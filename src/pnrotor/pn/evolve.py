@@ -91,14 +91,15 @@ class Evolution:
     chi1, chi2 : (N, 3) dimensionless spins in the inertial frame
     R : (N, 4) unit orbital-frame rotor (w, x, y, z), sign-continuous: n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹
     ell_hat : (N, 3) orbital angular momentum direction ℓ̂ = R ẑ R⁻¹
-
-    In a nonspinning or aligned run (``inputs['state'] == 'aligned'``) chi1, chi2 and ell_hat are constant and
-    are read-only (N, 3) views of their one row (``np.broadcast_to``; ``.copy()`` gives writable arrays).
     termination : str — why the forward integration stopped (see module docstring)
     stats : dict — nfev, nsteps, naccepted, nrejected (both halves), per-half counts, wall times,
         backward termination, messages
     inputs : dict — every input, with units in the key names; only floats, ints, bools, strings and
         lists of floats (absent f_min/f_max and the value of 'steps'/'final' sampling are NaN)
+
+    In a nonspinning or aligned run (``inputs['state'] == 'aligned'``) chi1, chi2 and ell_hat are constant: they
+    are read-only (N, 3) views of their one row (zero stride along N, as ``np.broadcast_to`` gives);
+    ``run.chi1.copy()`` gives a writable C-ordered array.
     """
 
     t: np.ndarray
