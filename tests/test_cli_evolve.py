@@ -574,26 +574,35 @@ def test_modes_defaults_are_those_of_pnrotor_modes():
 def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     """With no compiled DOP853 core in numba's cache (an empty NUMBA_CACHE_DIR), one line on stderr says
     that the kernels are being compiled, once, and the core's compilation starts in another process; with
-    the cache filled, nothing."""
+    the cache filled, nothing; a run writing modes also starts the modes kernels' compilation aside while
+    they are missing."""
     from pnrotor import numba_cache
     from pnrotor.cli import evolve as cli_evolve
     started = []
-    monkeypatch.setattr(numba_cache, "compile_core_aside", lambda: started.append(True))
+    monkeypatch.setattr(numba_cache, "compile_aside", started.append)
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(in_tmp / "empty-cache"))
     cli_evolve._warn_if_cold()
-    assert capsys.readouterr().err == ("pnrotor: compiling its numba kernels for this machine, once (~10-15 s); "
-                                       "later runs load them in ~1 s\n")
-    assert started == [True]
+    assert capsys.readouterr().err == ("pnrotor: compiling its numba kernels for this machine, once (~15-20 s); "
+                                       "later runs load them in ~1-2 s\n")
+    assert started == ["core"]
     core = Path(numba_cache.cache_folder()) / "dop853._dop853_core-495.py311.nbi"
     assert core.parent.parent == in_tmp / "empty-cache"
     core.parent.mkdir(parents=True)
     core.touch()
     cli_evolve._warn_if_cold()
-    assert capsys.readouterr().err == "" and started == [True]
+    assert capsys.readouterr().err == "" and started == ["core"]
+    cli_evolve._warn_if_cold(modes=True)
+    assert "(~20-30 s)" in capsys.readouterr().err and started == ["core", "modes"]
+    kernels = Path(numba_cache.cache_folder("waveform")) / "amplitudes._sum-215.py311.nbi"
+    assert kernels.parent.parent == in_tmp / "empty-cache"
+    kernels.parent.mkdir(parents=True)
+    kernels.touch()
+    cli_evolve._warn_if_cold(modes=True)
+    assert capsys.readouterr().err == "" and started == ["core", "modes"]
     # a population run compiles evolve_many's loop (which holds the core): said while that is missing, with
     # nothing compiled aside (the core is cached)
     cli_evolve._warn_if_cold(population=True)
-    assert capsys.readouterr().err.startswith("pnrotor: compiling its numba kernels") and started == [True]
+    assert capsys.readouterr().err.startswith("pnrotor: compiling its numba kernels") and started == ["core", "modes"]
     loop = Path(numba_cache.cache_folder("pn")) / "many._integrate_all-101.py311.nbi"
     assert loop.parent.parent == in_tmp / "empty-cache"
     loop.parent.mkdir(parents=True)
@@ -602,18 +611,20 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     assert capsys.readouterr().err == ""
 
 
-def test_the_core_compiled_aside_is_what_the_cache_then_holds(tmp_path, monkeypatch):
-    """compile_core_aside's process fills the cache it is given (here a fresh one: a real compilation, ~8 s)
+@pytest.mark.parametrize("what, kernel, package", [("core", "dop853._dop853_core", "ode"),
+                                                   ("modes", "amplitudes._sum", "waveform")])
+def test_what_is_compiled_aside_is_what_the_cache_then_holds(tmp_path, monkeypatch, what, kernel, package):
+    """compile_aside's process fills the cache it is given (here a fresh one: a real compilation, ~10-15 s)
     and exits cleanly; waiting for it twice is harmless."""
     from pnrotor import numba_cache
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    assert numba_cache.is_cold()
-    numba_cache.compile_core_aside()
-    process = numba_cache._aside
-    numba_cache.wait_for_core_aside()
-    numba_cache.wait_for_core_aside()
-    assert process.returncode == 0 and numba_cache._aside is None
-    assert not numba_cache.is_cold()
+    assert numba_cache.is_cold(kernel, package)
+    numba_cache.compile_aside(what)
+    process = numba_cache._asides[what]
+    numba_cache.wait_for_aside(what)
+    numba_cache.wait_for_aside(what)
+    assert process.returncode == 0 and what not in numba_cache._asides
+    assert not numba_cache.is_cold(kernel, package)
 
 
 SLOW_RUN = """

@@ -3,12 +3,15 @@ compiling the biggest of them beside the rest.
 
 pnrotor's kernels are compiled with ``cache=True``: the first run on a machine compiles them and numba
 stores them beside the sources in ``__pycache__``, or in ``NUMBA_CACHE_DIR`` when that is set.
-:func:`is_cold` looks for the index file of the DOP853 core, the kernel every run needs, in the folder
-numba would use (:func:`cache_folder`), so that a caller can say what the wait is.  That core is half of a cold start (7.4 s of 15.8 for the CLI's main job,
-mostly numba's typing), and numba compiles one function at a time in a process: on a cold cache
-:func:`compile_core_aside` compiles it in a second process while this one compiles the rest of its run
-(parameters, right-hand side, events), and the core's first use waits for that process and loads what it
-cached (``pnrotor.ode.dop853._entry_point``).
+:func:`is_cold` looks for the index file of a kernel (by default the DOP853 core, which every run needs) in the
+folder numba would use (:func:`cache_folder`), so that a caller can say what the wait is.  numba compiles one
+function at a time in a process, and the biggest units take ~12 s each here: on a cold cache
+:func:`compile_aside` compiles the DOP853 core (``'core'``), and for a run whose modes will be written the
+modes kernels (``'modes'``), each in a process of its own while this one compiles the rest of its run
+(parameters, right-hand side, events); their first use waits for that process (:func:`wait_for_aside`) and loads
+what it cached (``pnrotor.ode.dop853._entry_point``, ``pnrotor.waveform.amplitudes.modes_in_frame``).  A cold
+``pnrotor evolve --modes`` (30 + 10 precessing) took 29-32 s with the modes kernels compiled after the run, in
+this process (measured; the figures with them aside are in the README).
 """
 
 import glob
@@ -18,10 +21,14 @@ import subprocess
 import sys
 from importlib.util import find_spec
 
-__all__ = ["is_cold", "cache_folder", "compile_core_aside", "wait_for_core_aside"]
+__all__ = ["is_cold", "cache_folder", "compile_aside", "wait_for_aside"]
 
-_aside = None
-"""The process compiling the DOP853 core, while it may still be running."""
+_ASIDE_CODE = {"core": "from pnrotor.ode.dop853 import compile_core; compile_core()",
+               "modes": "from pnrotor.waveform.amplitudes import compile_kernels; compile_kernels()"}
+"""What :func:`compile_aside` can compile, and the code its process runs."""
+
+_asides = {}
+"""The processes compiling aside, by what they compile, while they may still be running."""
 
 
 def is_cold(kernel="dop853._dop853_core", package="ode"):
@@ -46,20 +53,17 @@ def cache_folder(package="ode"):
     return os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "numba", sub)
 
 
-def compile_core_aside():
-    """Start compiling the DOP853 core into numba's cache in another process (module docstring); it dies
-    with this one.  Nothing is lost if it fails: the core's first use then compiles it here."""
-    global _aside
+def compile_aside(what):
+    """Start compiling ``what`` ('core' or 'modes', module docstring) into numba's cache in another process; it
+    dies with this one.  Nothing is lost if it fails: the first use then compiles it here."""
     from pnrotor.batch.backends import _die_with_parent
 
-    _aside = subprocess.Popen([sys.executable, "-c", "from pnrotor.ode.dop853 import compile_core; compile_core()"],
-                              stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                              preexec_fn=_die_with_parent)
+    _asides[what] = subprocess.Popen([sys.executable, "-c", _ASIDE_CODE[what]], stdin=subprocess.DEVNULL,
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=_die_with_parent)
 
 
-def wait_for_core_aside():
-    """Wait for the process of :func:`compile_core_aside`, if one was started (at most once)."""
-    global _aside
-    if _aside is not None:
-        _aside.wait()
-        _aside = None
+def wait_for_aside(what):
+    """Wait for the process of :func:`compile_aside` compiling ``what``, if one was started (at most once)."""
+    process = _asides.pop(what, None)
+    if process is not None:
+        process.wait()

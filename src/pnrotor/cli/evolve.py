@@ -120,20 +120,24 @@ def add_parser(subparsers):
     parser.set_defaults(func=run)
 
 
-def _warn_if_cold(here=True, population=False):
+def _warn_if_cold(here=True, population=False, modes=False):
     """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent wait; if
     this process runs the evolutions (``here``), the biggest kernel, the DOP853 core, is compiled in a second
-    process meanwhile (`pnrotor.numba_cache.compile_core_aside`; worker processes compile their own).  A
-    ``population`` run also compiles `evolve_many`'s loop around the core (which loads the core compiled aside):
-    the line is said when either is missing."""
+    process meanwhile (`pnrotor.numba_cache.compile_aside`; worker processes compile their own), and so are the
+    kernels of the ``modes`` it will write, in a third.  A ``population`` run also compiles `evolve_many`'s loop around the core (which loads the core compiled
+    aside): the line is said when either is missing."""
     from pnrotor import numba_cache
 
     core = numba_cache.is_cold()
-    if core or population and numba_cache.is_cold("many._integrate_all", "pn"):
-        print(f"pnrotor: compiling its numba kernels for this machine, once ({'~20-25' if population else '~10-15'} "
-              "s); later runs load them in ~1 s", file=sys.stderr, flush=True)
+    waves = modes and numba_cache.is_cold("amplitudes._sum", "waveform")
+    if core or waves or population and numba_cache.is_cold("many._integrate_all", "pn"):
+        wait = "~20-25" if population else "~20-30" if waves else "~15-20"
+        print(f"pnrotor: compiling its numba kernels for this machine, once ({wait} s); later runs load them in ~1-2 s",
+              file=sys.stderr, flush=True)
         if here and core:
-            numba_cache.compile_core_aside()
+            numba_cache.compile_aside("core")
+        if here and waves:
+            numba_cache.compile_aside("modes")
 
 
 def run(args):
@@ -192,7 +196,7 @@ def _run_one(args):
 
         wave_options = modes.check_arguments(*_modes_options(args))
 
-    _warn_if_cold()
+    _warn_if_cold(modes=args.modes)
     run = backends.evolve_row(params)
     if default_folder:
         path.parent.mkdir(exist_ok=True)

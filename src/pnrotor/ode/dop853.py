@@ -207,13 +207,13 @@ _ENTRY_POINTS = {}
 def _entry_point(core, sig):
     """The compiled entry point of a core for its one signature ``sig`` (or the dispatcher), compiled or loaded
     from numba's cache on first use; a compilation of the core that the CLI started in another process
-    (:func:`pnrotor.numba_cache.compile_core_aside`) is awaited first, so that this one loads it."""
+    (:func:`pnrotor.numba_cache.compile_aside`) is awaited first, so that this one loads it."""
     ep = _ENTRY_POINTS.get(core)
     if ep is None:
         if not core.overloads:
             from pnrotor import numba_cache
 
-            numba_cache.wait_for_core_aside()
+            numba_cache.wait_for_aside("core")
         try:
             core.compile(sig)
             ep = core.overloads[tuple(sig.args)].entry_point
@@ -224,7 +224,7 @@ def _entry_point(core, sig):
 
 
 def compile_core():
-    """Compile the DOP853 core into numba's cache (or load it): what :func:`pnrotor.numba_cache.compile_core_aside`
+    """Compile the DOP853 core into numba's cache (or load it): what :func:`pnrotor.numba_cache.compile_aside`
     runs in another process."""
     _entry_point(_dop853_core, _CORE_SIG)
 

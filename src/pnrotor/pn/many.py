@@ -253,7 +253,7 @@ def _integrate_groups(groups, atol, rtol, max_steps, out, counts):
                 out.ell_hat, counts, np.empty(0), OUT_FINAL)
         start = time.perf_counter()
         if not _integrate_all.overloads:   # it is compiled with the DOP853 core inside: load the core that the
-            numba_cache.wait_for_core_aside()   # CLI may be compiling in another process, not compile it twice
+            numba_cache.wait_for_aside("core")   # CLI may be compiling in another process, not compile it twice
         with numba.parallel_chunksize(1):
             _integrate_all(*args)
         seconds += time.perf_counter() - start

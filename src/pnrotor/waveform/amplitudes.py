@@ -259,6 +259,10 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
     same for rotors about ẑ, R = exp(Φẑ/2): H_ℓm e^{−imΦ}).  Spins chi1, chi2: None (nonspinning), (3,) the
     same at every sample along (n̂, λ̂, ℓ̂), or (N, 3) per sample, along (n̂, λ̂, ℓ̂) or, given R, in the
     inertial frame (projected per sample in the kernel)."""
+    if not _sum.overloads:   # the CLI may be compiling the kernels in another process: load them, not compile twice
+        from pnrotor import numba_cache
+
+        numba_cache.wait_for_aside("modes")
     M = m1 + m2
     X1, X2 = m1 / M, m2 / M
     nu, delta = X1 * X2, X1 - X2
@@ -281,6 +285,15 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
          float(kappa1), float(kappa2), int(ell_max), ell_start, target, k, q, c, *plan,
          out.view(np.float64))
     return out
+
+
+def compile_kernels():
+    """Compile the kernels of :func:`modes_in_frame` (or load them from numba's cache) with a one-sample call: every
+    run gives them the same types (spins, frames and orders are values, the arrays C-contiguous float64).  What
+    :func:`pnrotor.numba_cache.compile_aside` runs in another process for a CLI run whose modes it writes, on a cold
+    cache, so that they compile beside the run, not after it."""
+    modes_in_frame(np.full(1, 0.3), np.zeros(3), np.zeros(3), 1.0, 1.0, 2, 0, R=np.array([[1.0, 0.0, 0.0, 0.0]]),
+                   frame="rotors")
 
 
 def coorbital_modes(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None):
