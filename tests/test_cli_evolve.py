@@ -532,12 +532,16 @@ def test_bad_modes_options_exit_2_before_running(extra, message, in_tmp, capsys,
     assert code == 2 and message in err and os.listdir(in_tmp) == []
 
 
-def test_modes_with_batch_are_stored_beside_each_run(in_tmp, capsys):
-    """--batch --modes: the groups NAME and NAME.modes of each row; bad modes options exit 2 before running."""
+def test_modes_with_batch_are_stored_beside_each_run(in_tmp, capsys, monkeypatch):
+    """--batch --modes: the groups NAME and NAME.modes of each row (on a cold cache their kernels are compiled
+    aside too); bad modes options exit 2 before running."""
+    from pnrotor.cli import evolve as cli_evolve
+    said = []
+    monkeypatch.setattr(cli_evolve, "_warn_if_cold", lambda **kw: said.append(kw))
     write_text(in_tmp / "p.csv", "m1,m2,chi1,chi2,f_ref,name\n30,10,\"0.3,0,0.2\",\"0,0,0\",100,x\n")
     code, out, _ = evolve(capsys, "--batch", "p.csv", "--modes", "--ell-max", "3", "--amplitude-order", "1",
                           "-o", "p.h5")
-    assert code == 0 and "with their modes" in out
+    assert code == 0 and "with their modes" in out and said == [dict(here=True, modes=True)]
     assert sorted(hdf5.list_runs(in_tmp / "p.h5")) == ["x", "x.modes"]
     h = hdf5.read(in_tmp / "p.h5", "x.modes")
     assert h.ell_max == 3 and h.inputs["amplitude_order"] == 1.0

@@ -410,6 +410,8 @@ def test_a_cfunc_is_refused_and_by_address_checks_its_function():
         by_address(cfunc(RHS_SIG)(oscillator.py_func), RHS_SIG)
     with pytest.raises(TypeError, match="by_address.s function must be a numba @njit function compilable"):
         by_address(oscillator, AFTER_STEP_SIG)
+    with pytest.raises(TypeError, match="by_address takes a numba signature"):
+        by_address(oscillator, "void(float64, float64[::1], float64[::1], float64[::1])")
 
 
 def test_event_direction_and_zero_at_start():

@@ -68,6 +68,15 @@ def test_rotors_within_a_tiny_angle_of_the_poles_give_the_poles_matrices(eps):
             np.testing.assert_allclose(wigner_D(tilted, ELL_MAX), wigner_D(exact, ELL_MAX), rtol=0, atol=1e-14)
 
 
+@pytest.mark.parametrize("scale", [1e-300, 1e-153, 1e-100, 1e-30, 1e-12, 3.0, 1e30, 1e100, 1.3e154, 1e300])
+def test_rotors_need_not_be_normalized(scale):
+    """D(s R) = D(R) for any scale s whose products do not overflow, near the poles too (a review found 5e-6 errors at
+    s = 1e-30 and NaN at 1e-153 and 1.3e154 before rotors far from unit norm were first scaled by a power of 2)."""
+    R = np.concatenate((random_rotors(10), near_poles(), [[np.cos(0.7), -1e-129 * np.sin(2.1), 1e-129 * np.cos(2.1),
+                                                           np.sin(0.7)]]))
+    np.testing.assert_allclose(wigner_D(scale * R, ELL_MAX), wigner_D(R, ELL_MAX), rtol=0, atol=1e-13)
+
+
 def test_against_spherical_package_including_poles():
     spherical = pytest.importorskip("spherical")
     quaternionic = pytest.importorskip("quaternionic")

@@ -303,7 +303,7 @@ def _run_batch(args):
         print(f"pnrotor evolve --batch {args.batch}: {_binaries(len(plan.rows))}"
               + (f" ({bad} with bad values)" if bad else "") + f", on {plan.where}"
               + ("; with their modes (groups NAME and NAME.modes)" if args.modes else ""))
-    _warn_if_cold(here=plan.where == "this process")
+    _warn_if_cold(here=plan.where == "this process", modes=args.modes)
     outcome = plan.run(progress=not args.quiet and sys.stderr.isatty())
     if not args.quiet:
         print("\n".join(_batch_line(plan.rows[i], outcome.briefs[i]) for i in sorted(outcome.briefs)))

@@ -60,6 +60,7 @@ import numpy as np
 from numba import njit, types
 from numba.core import cgutils
 from numba.core.ccallback import CFunc
+from numba.core.typing.templates import Signature
 from numba.extending import intrinsic
 from numba.core.registry import CPUDispatcher
 
@@ -186,6 +187,9 @@ def by_address(f, sig):
     if entry is None:
         if not isinstance(f, CPUDispatcher):
             raise TypeError(f"by_address takes an @njit function, got {type(f).__name__}")
+        if not isinstance(sig, Signature):
+            raise TypeError(f"by_address takes a numba signature (pnrotor.ode.RHS_SIG, AFTER_STEP_SIG or EVENTS_SIG), "
+                            f"got {sig!r}")
         _check_dispatcher(f, sig, "by_address's function")
         entry = _BY_ADDRESS[key] = (sig, _FunctionAddress(f, sig, _addresses(f, sig, raises=False)))
     return entry[1]

@@ -58,6 +58,7 @@ Wigner's sum (and 0.6 and 3.0 µs for the per-sample version before that); what 
 stores of the blocks' rows.
 """
 
+import math
 from fractions import Fraction
 from functools import lru_cache
 from math import factorial, sqrt
@@ -70,9 +71,10 @@ from pnrotor.waveform.layout import mode_index, n_modes
 __all__ = ["d_half_pi", "rotation_plan", "wigner_D", "rotate_modes"]
 
 _TINY2 = 1e-280
-"""|R_a|², |R_b|² at or below this fraction of |R|² count as zero: above it they are normal numbers, so their square
-roots, and the unit phases formed with them, are exact to rounding (at ~1e-160 of |R| the squares are subnormal,
-the phases were off by up to 4e-5: a review's finding)."""
+"""|R_a|², |R_b|² at or below this fraction of |R|² count as zero: above it, with |R|² > 1e-8 (rotors farther from
+unit norm are first scaled by a power of 2), they are normal numbers, so their square roots, and the unit phases
+formed with them, are exact to rounding (at ~1e-160 of |R| the squares are subnormal, the phases were off by up to
+4e-5: a review's finding)."""
 
 
 @lru_cache(maxsize=None)
@@ -213,6 +215,10 @@ def _rotor_block(R, i0, nb, q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im):
     for s in range(nb):
         w, x, y, z = q[0, s], q[1, s], q[2, s], q[3, s]
         a2, b2 = w * w + z * z, x * x + y * y
+        if not 1e-8 < a2 + b2 < 1e8:   # far from unit norm: scaled by a power of 2 (exact) to |R| in [1/2, 2)
+            e = math.frexp(max(abs(w), abs(x), abs(y), abs(z)))[1]
+            w, x, y, z = math.ldexp(w, -e), math.ldexp(x, -e), math.ldexp(y, -e), math.ldexp(z, -e)
+            a2, b2 = w * w + z * z, x * x + y * y
         a, b = np.sqrt(a2), np.sqrt(b2)
         n = 1.0 / (a2 + b2)   # e^{iβ} = (|R_a| + i |R_b|)² / |R|²
         eb_re[1, s], eb_im[1, s] = (a2 - b2) * n, 2.0 * a * b * n
