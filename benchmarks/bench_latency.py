@@ -61,7 +61,8 @@ def core_call(s, system, t_eval, dense):
     """The compiled DOP853 core of the forward half with the arguments ``dop853`` would prepare, as a thunk."""
     p, t_end, directions, _ = half(s, system, True)
     n = system.y0.size
-    args = (_function_addresses(system.rhs, by_address(no_after_step, AFTER_STEP_SIG), system.events), 0.0, system.y0, t_end, p,
+    functions = _function_addresses(system.rhs, by_address(no_after_step, AFTER_STEP_SIG), system.events)
+    args = (functions, 0.0, system.y0, t_end, p,
             np.full(n, s.atol), np.full(n, s.rtol), 0.0, np.inf, s.max_steps, np.empty(0),
             OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, directions.size, directions,
             CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])

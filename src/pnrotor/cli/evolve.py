@@ -124,8 +124,8 @@ def _warn_if_cold(here=True, population=False, modes=False):
     """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent wait; if
     this process runs the evolutions (``here``), the biggest kernel, the DOP853 core, is compiled in a second
     process meanwhile (`pnrotor.numba_cache.compile_aside`; worker processes compile their own), and so are the
-    kernels of the ``modes`` it will write, in a third.  A ``population`` run also compiles `evolve_many`'s loop around the core (which loads the core compiled
-    aside): the line is said when either is missing."""
+    kernels of the ``modes`` it will write, in a third.  A ``population`` run also compiles `evolve_many`'s loop
+    around the core (which loads the core compiled aside): the line is said when either is missing."""
     from pnrotor import numba_cache
 
     core = numba_cache.is_cold()

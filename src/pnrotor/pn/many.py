@@ -246,7 +246,8 @@ def _integrate_groups(groups, atol, rtol, max_steps, out, counts):
         for j, x in enumerate(nearer):
             for q, (vk, r) in enumerate(x):
                 near_vk[j, q], near_r[j, q] = vk, r
-        args = (_function_addresses(rhs, after_step, events), np.array(y0), np.array(p), np.array(t_end), np.array(directions),
+        args = (_function_addresses(rhs, after_step, events), np.array(y0), np.array(p), np.array(t_end),
+                np.array(directions),
                 atol_a, rtol_a, max_steps, *_CONTROLLER, mode, np.array([s.R0 for s in ss]),
                 np.array([s.ell_hat for s in ss]), np.array([s.chi1 for s in ss]), np.array([s.chi2 for s in ss]),
                 np.array(rows, dtype=np.int64), near_vk, near_r, out.t, out.v, out.Phi, out.chi1, out.chi2, out.R,

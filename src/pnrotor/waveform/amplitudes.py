@@ -259,7 +259,7 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
     same for rotors about ẑ, R = exp(Φẑ/2): H_ℓm e^{−imΦ}).  Spins chi1, chi2: None (nonspinning), (3,) the
     same at every sample along (n̂, λ̂, ℓ̂), or (N, 3) per sample, along (n̂, λ̂, ℓ̂) or, given R, in the
     inertial frame (projected per sample in the kernel)."""
-    if not getattr(_sum, "overloads", True):   # the CLI may be compiling them in another process: load, not compile twice
+    if not getattr(_sum, "overloads", True):   # the CLI may be compiling them aside: load them, not compile twice
         from pnrotor import numba_cache
 
         numba_cache.wait_for_aside("modes")
