@@ -960,14 +960,14 @@ def _jit_function(f, sig, name):
         return _FunctionAddress(f, sig, known[1])
     if isinstance(f, CFunc):   # its C wrapper prints an exception raised inside and returns: a wrong run, not an error
         raise TypeError(f"{name} must be an @njit function, not a @cfunc (an exception raised inside a @cfunc cannot "
-                        f"reach the caller); use @njit(pnrotor.ode.{_SIG_NAMES[name]}, cache=True)")
+                        f"reach the caller); use @njit({_sig_label(sig)}, cache=True)")
     if isinstance(f, _FunctionAddress):
         # the identity test spares comparing signatures (~0.9 µs, measured) in the usual case
         if f._sig is not sig and f._sig != sig:
             raise TypeError(f"{name} must have the signature {sig}; got a function of signature {f._sig}")
         return f
     raise TypeError(f"{name} must be a numba-compiled function, e.g. decorated with "
-                    f"@njit(pnrotor.ode.{_SIG_NAMES[name]}, cache=True); got {type(f).__name__}")
+                    f"@njit({_sig_label(sig)}, cache=True); got {type(f).__name__}")
 
 
 def _check_dispatcher(f, sig, name):
@@ -987,13 +987,13 @@ def _check_dispatcher(f, sig, name):
             f"(e.g. @njit({_sig_label(sig)}, cache=True)): {exc}") from None
 
 
+_SIG_LABELS = {id(RHS_SIG): "pnrotor.ode.RHS_SIG", id(AFTER_STEP_SIG): "pnrotor.ode.AFTER_STEP_SIG",
+               id(EVENTS_SIG): "pnrotor.ode.EVENTS_SIG"}
+
+
 def _sig_label(sig):
     """How to write ``sig`` in a decorator: its public name if it is one of the three, else itself."""
-    return {id(RHS_SIG): "pnrotor.ode.RHS_SIG", id(AFTER_STEP_SIG): "pnrotor.ode.AFTER_STEP_SIG",
-            id(EVENTS_SIG): "pnrotor.ode.EVENTS_SIG"}.get(id(sig), f"'{sig}'")
-
-
-_SIG_NAMES = {"rhs": "RHS_SIG", "after_step": "AFTER_STEP_SIG", "events": "EVENTS_SIG"}
+    return _SIG_LABELS.get(id(sig), f"'{sig}'")
 
 
 def _positive_factor(x, name, lo, hi, lo_open=True, hi_open=False):
