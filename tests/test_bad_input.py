@@ -69,6 +69,23 @@ def test_evolve_rejects(kw, name):
         pnrotor.evolve(**{**GOOD, **kw})
 
 
+def test_check_inputs_raises_what_evolve_raises_without_compiled_code():
+    """pnrotor.pn.evolve.check_inputs (what the CLI runs before compiling) refuses every case above with evolve's
+    own message, but the one whose check needs the compiled set-up (f_ref past the end of the inspiral)."""
+    from pnrotor.pn.evolve import check_inputs
+
+    for kw, _ in EVOLVE_CASES:
+        with pytest.raises(ValueError) as by_evolve:
+            pnrotor.evolve(**{**GOOD, **kw})
+        if "past the end of the" in str(by_evolve.value):
+            assert check_inputs(**{**GOOD, **kw}) is None, kw
+            continue
+        with pytest.raises(ValueError) as checked:
+            check_inputs(**{**GOOD, **kw})
+        assert str(checked.value) == str(by_evolve.value), kw
+    assert check_inputs(**GOOD) is None
+
+
 @pytest.mark.parametrize("sampling", [5e-324, ("per_orbit", 10 ** 13), 1 / 4096])
 def test_sample_count_is_bounded_by_memory_before_allocating(sampling, monkeypatch):
     """Δt or n per orbit that would not fit: a ValueError naming sampling and the size, not a MemoryError

@@ -532,6 +532,23 @@ def test_bad_modes_options_exit_2_before_running(extra, message, in_tmp, capsys,
     assert code == 2 and message in err and os.listdir(in_tmp) == []
 
 
+@pytest.mark.parametrize("extra, message", [
+    (["--f-ref", "1e6"], "f_ref = 1000000.0 Hz gives v = 8.522 >= 1"),
+    (["--m1", "-3"], "m1 must be"),
+    (["--chi1", "0.9,0.9,0"], "chi1"),
+    (["--pn-order", "5"], "pn_order must be"),
+    (["--sampling", "-1"], "sampling"),
+])
+def test_bad_inputs_exit_2_before_the_cold_line_and_compiling(extra, message, in_tmp, capsys, monkeypatch):
+    """Input errors that evolve's first stage finds are said at once: not after the cold cache's line and the start
+    of the compiling processes (a review found --f-ref 1e6 waited ~2.5 s for them on a cold cache)."""
+    from pnrotor.cli import evolve as cli_evolve
+    monkeypatch.setattr(cli_evolve, "_warn_if_cold", lambda **kw: pytest.fail("said it compiles"))
+    monkeypatch.setattr(backends, "evolve_row", lambda params: pytest.fail("ran"))
+    code, _, err = evolve(capsys, *FAST, *extra, "-o", "w.h5")
+    assert code == 2 and message in err and os.listdir(in_tmp) == []
+
+
 def test_modes_with_batch_are_stored_beside_each_run(in_tmp, capsys, monkeypatch):
     """--batch --modes: the groups NAME and NAME.modes of each row (on a cold cache their kernels are compiled
     aside too); bad modes options exit 2 before running."""

@@ -196,6 +196,9 @@ def _run_one(args):
 
         wave_options = modes.check_arguments(*_modes_options(args))
 
+    from pnrotor.pn.evolve import check_inputs
+
+    check_inputs(**params)   # an input error says so at once, before the cold cache's line and compiling
     _warn_if_cold(modes=args.modes)
     run = backends.evolve_row(params)
     if default_folder:

@@ -38,6 +38,7 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
 """
 
 import functools
+import inspect
 import math
 import time
 from dataclasses import dataclass, field
@@ -373,6 +374,19 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Evolution(t=np.asarray(t_out, dtype=np.float64), t_seconds=np.asarray(t_out) * s.M_sec, v=v, Phi=Phi,
                      chi1=x1, chi2=x2, R=R, ell_hat=ellh, termination=term_f, stats=stats, inputs=inputs)
+
+
+def check_inputs(m1, m2, chi1, chi2, f_ref, **options):
+    """:func:`evolve`'s checks of its arguments (its first stage, :func:`~pnrotor.pn.settings.settings`), without
+    running anything compiled: the ValueError ``evolve`` would raise first for them, or None.  The CLI calls it
+    before it says it is compiling and starts compiling (a cold cache is no reason to wait for an input error);
+    one check needs the compiled set-up and stays in ``evolve``: whether f_ref is past the end of the inspiral."""
+    settings(m1, m2, chi1, chi2, f_ref, **{**_OPTIONS, **options})
+
+
+_OPTIONS = {name: parameter.default for name, parameter in inspect.signature(evolve).parameters.items()
+            if parameter.kind is inspect.Parameter.KEYWORD_ONLY}
+"""evolve's keyword arguments and their defaults."""
 
 
 _STATS_KEYS = [(key, f"{key}_forward", f"{key}_backward") for key in ("nfev", "nsteps", "naccepted", "nrejected")]
