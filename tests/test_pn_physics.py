@@ -310,6 +310,36 @@ def test_astropy_quantities():
 # sampling
 # --------------------------------------------------------------------------------------------------
 
+@pytest.mark.parametrize("forward", [True, False])
+def test_per_orbit_times_are_the_roots_of_the_interpolated_phase(forward):
+    """pnrotor.pn.sampling._phase_times (Newton in θ on each segment's polynomial, compiled) against scipy's brentq on
+    the DenseOutput's Φ(t), target by target, on a precessing run's forward and backward halves: the same times to
+    brentq's accuracy (~1e-15); a target at a step boundary gives that boundary, one rounded past the end the end itself."""
+    from scipy.optimize import brentq
+
+    from pnrotor.pn.evolve import _OPTIONS, build_system, integrate_half
+    from pnrotor.pn.sampling import _phase_times
+    from pnrotor.pn.settings import settings
+
+    s = settings(30.0, 10.0, (0.5, 0.1, 0.3), (0.0, 0.4, -0.2), 20.0, **{**_OPTIONS, "f_min": 10.0})
+    res, _ = integrate_half(s, build_system(s), forward, None, True)
+    d, i = res.dense, 11
+    phi = lambda t: d(t)[i]   # noqa: E731
+    end = res.y[-1, i]
+    targets = np.linspace(0.0, end, 97)[1:-1]
+    boundary = d.coef[5, 0, i]   # Φ where the sixth step starts
+    targets = np.sort(np.append(targets, boundary))[:: 1 if forward else -1]
+    t = _phase_times(d, i, targets)
+    lo, hi = sorted((d.t_min, d.t_max))
+    for tq, target in zip(t, targets):
+        root = brentq(lambda x: phi(x) - target, lo, hi, xtol=1e-300, rtol=9e-16)
+        assert abs(tq - root) <= 2e-15 * abs(root), (target, tq, root)
+    assert t[np.flatnonzero(targets == boundary)[0]] == d.seg_t[5]
+    assert np.all(np.diff(t) * d.direction > 0)
+    past = _phase_times(d, i, np.array([end + 1e-9 * d.direction * abs(end)]))
+    assert past[0] == d.t_max
+
+
 def test_sampling_modes_agree():
     args = (30, 10, [0.5, 0.1, 0.3], [0.0, 0.4, -0.2], 20.0)
     kw = dict(f_min=15.0)
