@@ -340,6 +340,16 @@ def test_per_orbit_times_are_the_roots_of_the_interpolated_phase(forward):
     assert past[0] == d.t_max
 
 
+def test_per_orbit_runs_use_the_one_compiled_root_finder():
+    """The per-orbit kernel compiled ahead by compile_output_kernel (beside the DOP853 core, on a cold cache) has
+    the types every run gives it: precessing and aligned, forward and backward, one compiled signature."""
+    from pnrotor.pn.sampling import _fill_history, _phase_roots
+
+    for args in ((30, 10, [0.5, 0.1, 0.3], [0.0, 0.4, -0.2], 100.0), (1.4, 1.4, [0, 0, 0.1], [0, 0, 0], 300.0)):
+        evolve(*args, f_min=0.8 * args[4], sampling=("per_orbit", 3))
+    assert len(_phase_roots.signatures) == 1 and len(_fill_history.signatures) == 1
+
+
 def test_sampling_modes_agree():
     args = (30, 10, [0.5, 0.1, 0.3], [0.0, 0.4, -0.2], 20.0)
     kw = dict(f_min=15.0)

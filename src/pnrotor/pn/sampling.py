@@ -304,10 +304,13 @@ def compile_output_kernel(s):
     """Compile :func:`_fill_history` (or load it from numba's cache) now, once per process, for the argument
     types :func:`sample` gives it.  :func:`pnrotor.pn.evolve.evolve` calls this before it integrates, so that on
     a cold cache it is compiled while another process compiles the DOP853 core (:mod:`pnrotor.numba_cache`),
-    not after it: 0.8 s of the CLI's cold start (measured)."""
+    not after it: 0.8 s of the CLI's cold start (measured); and so is :func:`_phase_roots` for a per-orbit run
+    (0.6 s)."""
     if not _fill_history.overloads:
         _fill_history(output_mode(s), _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, _NO_Y, *_fixed(s), 0,
                       *_allocate_history(0))
+    if s.sampling == "per_orbit" and not _phase_roots.overloads:
+        _phase_roots(_NO_SEG, _NO_SEG, _NO_COEF, 0, _NO_T, 0.0, _NO_T)
 
 
 def sample(s, res_f, res_b):
@@ -382,6 +385,7 @@ def _orbit_times(per_orbit, phi_i, res_f, res_b):
 def _phase_times(dense, phi_index, targets):
     """Times at which Φ(t) of the dense output equals each target, for targets in the order of integration (Φ
     rises with t, so falls along a backward half): :func:`_phase_roots`."""
+    targets = np.ascontiguousarray(targets, dtype=np.float64)   # the types of the one compiled signature
     t = np.empty(targets.size)
     _phase_roots(dense.seg_t, dense.seg_h, dense.coef, phi_index, targets, dense.t_max, t)
     return t
