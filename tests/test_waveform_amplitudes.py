@@ -112,3 +112,54 @@ def test_orders_and_modes_select_terms():
     assert newtonian.shape == (5, 1) and full.shape == (21, 1)
     assert newtonian[mode_index(2, 2), 0] == pytest.approx(8 * np.sqrt(np.pi / 5) * 0.1875 * 0.09, rel=1e-15)
     assert np.count_nonzero(newtonian) == 2
+
+
+def _summed_terms_reference(nu, delta, ell_max, order2, spins, constants):
+    """The kernel's real terms summed the plain way, from table(): a dict of (ℓ, target, k, q) → sum, in the
+    terms' order, its zero sums dropped, sorted (an independent route to what _real_terms must give)."""
+    rows, ks, qs, cs, parities = amplitudes.table(nu, delta, ell_max, order2, spins)
+    n_pow = 2 * ell_max + 1
+    summed = {}
+    for row, k, q, c, parity in zip(rows.tolist(), ks.tolist(), qs.tolist(), cs.tolist(), parities.tolist()):
+        ell, m = ell_m(ell_max)[row]
+        if constants is not None and q >= 2:
+            c, q = c * constants[q], 0
+        r = ell + m if parity > 0 else ell - m
+        for part, target in ((c.real, r), (c.imag, n_pow + r)):
+            if part:
+                summed[(ell, target, k, q)] = summed.get((ell, target, k, q), 0.0) + part
+    return sorted((key, value) for key, value in summed.items() if value)
+
+
+@pytest.mark.parametrize("X1", [0.5, 0.75, 50 / 55, 0.999])
+def test_kernel_terms_are_the_tables_terms_summed(X1):
+    """_real_terms (the terms as the kernel adds them, built from a layout cached per options and the coefficients
+    in one array) equals the plain per-term sum of table()'s terms bitwise, for every ℓ_max, amplitude order, spin
+    content and spins folded into the coefficients (aligned runs); equal masses drop their vanishing odd-m sums."""
+    rng = np.random.default_rng(7)
+    nu, delta = X1 * (1 - X1), 2 * X1 - 1
+    for ell_max in range(2, 9):
+        for order2 in range(8):
+            for spins, constants in ((False, None), (True, None), (True, tuple(rng.normal(size=amplitudes.N_Q)))):
+                amplitudes._real_terms.cache_clear()
+                ell_start, target, k, q, c, _ = amplitudes._real_terms(nu, delta, ell_max, order2, spins, constants)
+                ell = np.repeat(np.arange(ell_max + 1), np.diff(ell_start))
+                got = [((a, b, d, e), x) for a, b, d, e, x in zip(ell.tolist(), target.tolist(), k.tolist(),
+                                                                    q.tolist(), c.tolist())]
+                assert got == _summed_terms_reference(nu, delta, ell_max, order2, spins, constants), \
+                    (ell_max, order2, spins, constants is not None)
+
+
+def test_the_source_traversals_agree():
+    """_source_values (the coefficients alone, per call) lists the coefficients of _source_terms (with their
+    (ℓ, m, k, q, parity), which the cached layout reads) in the same order; nonspinning.terms with ell_max < 5
+    gives the modes of ℓ ≤ 4 of the full table."""
+    from pnrotor.waveform import nonspinning
+
+    for nu, delta in ((0.25, 0.0), (0.1875, 0.5), (0.0099, 0.98)):
+        full = nonspinning.terms(nu, delta)
+        assert nonspinning.terms(nu, delta, 4) == {key: value for key, value in full.items() if key[0] <= 4}
+        for ell_max in (2, 4, 5, 8):
+            for spins in (False, True):
+                values = amplitudes._source_values(nu, delta, ell_max, spins)
+                assert values == [c for *_, c, _ in amplitudes._source_terms(nu, delta, ell_max, spins)]

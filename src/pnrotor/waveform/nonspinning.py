@@ -46,13 +46,18 @@ _PI = math.pi
 _SQ = math.sqrt
 
 
-def terms(nu, delta):
-    """{(ℓ, m): [(k, a_k, b_k), …]} for m ≥ 0, ℓ ≤ 8: H_ℓm = h₀ Σ_k v^k (a_k + b_k ln v) (module docstring)."""
+def terms(nu, delta, ell_max=8):
+    """{(ℓ, m): [(k, a_k, b_k), …]} for m ≥ 0, ℓ ≤ 8 (those of ℓ ≥ 5 only if ell_max ≥ 5): H_ℓm = h₀ Σ_k v^k (a_k +
+    b_k ln v) (module docstring)."""
+    modes = _up_to_4(nu, delta)
+    if ell_max >= 5:
+        modes.update(_from_5(nu, delta))
+    return modes
+
+
+def _up_to_4(nu, delta):
+    """:func:`terms` of ℓ ≤ 4."""
     n, d, pi, i = nu, delta, _PI, 1j
-    # factors shared by the modes of ℓ ≥ 5
-    p5 = 1.0 + 5.0 * (-1.0 + n) * n
-    p7 = -1.0 + (-1.0 + n) ** 2 * 7.0 * n
-    q3 = d * (-1.0 + n) * (-1.0 + 3.0 * n)
     return {
         (2, 1): [(1, i * d / 3, 0), (3, i * d * (-17 + 20 * n) / 84, 0), (4, d * (1 + 2 * i * pi + 4 * _LN2) / 6, 0),
                  (5, i * d * (-172 + n * (-2036 + 237 * n)) / 1512, 0),
@@ -93,6 +98,17 @@ def terms(nu, delta):
                  (4, 4 * (1779 + 5 * n * (-1273 + 525 * n)) / (297 * _SQ(35)), 0),
                  (5, (160 * (-1 + 3 * n) * pi + i * (336 - 1193 * n + 320 * (-1 + 3 * n) * _LN2)) / (9 * _SQ(35)), 0),
                  (6, (-9618039 + 7 * n * (9793071 + 5 * n * (-3231338 + 678291 * n))) / (405405 * _SQ(35)), 0)],
+    }
+
+
+def _from_5(nu, delta):
+    """:func:`terms` of ℓ = 5 … 8."""
+    n, d, pi, i = nu, delta, _PI, 1j
+    # factors shared by the modes of ℓ ≥ 5
+    p5 = 1.0 + 5.0 * (-1.0 + n) * n
+    p7 = -1.0 + (-1.0 + n) ** 2 * 7.0 * n
+    q3 = d * (-1.0 + n) * (-1.0 + 3.0 * n)
+    return {
         (5, 1): [(3, i * d * (1 - 2 * n) / (288 * _SQ(385)), 0),
                  (5, -i * d * (179 + 4 * (-88 + n) * n) / (11232 * _SQ(385)), 0),
                  (6, d * (181 - 70 * i * (-1 + 2 * n) * pi + 140 * _LN2 - 28 * n * (313 + 10 * _LN2))
