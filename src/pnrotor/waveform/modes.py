@@ -25,6 +25,7 @@ Checked: against LALSuite's SpinTaylorT4 modes (ℓ ≤ 4, 1.5PN; tests/test_wav
 quadrupole formula (tests/test_waveform_modes.py).
 """
 
+import functools
 import math
 import sys
 from dataclasses import dataclass, field, replace
@@ -66,11 +67,18 @@ def _angle(value, name):
 
 def _scale(from_Mpc, to_Mpc, M_seconds):
     """Factor taking modes at distance ``from_Mpc`` (None: r h / M) to strain at ``to_Mpc``."""
+    metres_per_Mpc, c = _constants()
+    source = M_seconds * c if from_Mpc is None else from_Mpc * metres_per_Mpc
+    return source / (to_Mpc * metres_per_Mpc)
+
+
+@functools.cache
+def _constants():
+    """(metres in a megaparsec, c in m/s) from astropy, once (a unit conversion costs ~10 µs)."""
     from astropy import constants as const
     from astropy import units as u
 
-    source = M_seconds * const.c.value if from_Mpc is None else from_Mpc * u.Mpc.to(u.m)
-    return source / (to_Mpc * u.Mpc.to(u.m))
+    return u.Mpc.to(u.m), const.c.value
 
 
 @dataclass(eq=False)
