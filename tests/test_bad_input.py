@@ -97,6 +97,30 @@ def test_sample_count_is_bounded_by_memory_before_allocating(sampling, monkeypat
         pnrotor.evolve(**GOOD, sampling=sampling)
 
 
+@pytest.mark.parametrize("spins", [((0.5, 0.1, 0.3), (0.0, 0.4, -0.2)), ((0.0, 0.0, 0.3), (0.0, 0.0, -0.2))])
+@pytest.mark.parametrize("sampling", [1 / 32768, ("per_orbit", 2000)])
+def test_the_memory_check_counts_what_sampling_takes(spins, sampling):
+    """PEAK_BYTES_PER_SAMPLE, which the memory check multiplies by the sample count, against tracemalloc's peak of
+    the whole evolve call: not below its part per sample (the check would let a run run out of memory; a fixed
+    1 MiB of the integration's own arrays aside), nor more than 25% above it (it would refuse runs that fit), for
+    precessing and aligned runs, uniform and per orbit."""
+    import tracemalloc
+
+    from pnrotor.pn.sampling import PEAK_BYTES_PER_SAMPLE
+
+    kw = dict(GOOD, m1=30.0, chi1=spins[0], chi2=spins[1], f_min=15.0, sampling=sampling)
+    pnrotor.evolve(**kw)   # compiled, caches filled
+    tracemalloc.start()
+    try:
+        run = pnrotor.evolve(**kw)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(run) > 10 ** 5
+    bound = PEAK_BYTES_PER_SAMPLE["aligned" if spins[0][:2] == (0.0, 0.0) else "precessing"]
+    assert (peak - 2 ** 20) / len(run) <= bound <= 1.25 * peak / len(run), (peak / len(run), bound)
+
+
 def test_normalize_approximant_is_public():
     assert normalize_approximant("SpinTaylorT4") == normalize_approximant(" t4") == "T4"
     with pytest.raises(ValueError, match="approximant must be one of T1, T4, T5"):
