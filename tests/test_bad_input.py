@@ -60,6 +60,10 @@ EVOLVE_CASES = [
     (dict(pn_order="abc"), "pn_order"), (dict(pn_order=True), "pn_order"), (dict(max_steps=2 ** 70), "max_steps"),
     (dict(max_steps=1e6), "max_steps"), (dict(integrate_rotor="no"), "integrate_rotor"),
     (dict(integrate_rotor=1), "integrate_rotor"), (dict(precession_phase_shift="no"), "precession_phase_shift"),
+    # a review of 2026-11-27 (fifth session): integers beyond any float were OverflowErrors
+    (dict(sampling=("per_orbit", 10 ** 400)), "sampling per_orbit"), (dict(sampling=("dt", 10 ** 400)), "sampling"),
+    (dict(sampling=("per_orbit", 1e300)), "sampling per_orbit"), (dict(sampling=("per_orbit", 2 ** 53 + 1)), "2\\^53"),
+    (dict(m1=10 ** 400), "m1"), (dict(f_ref=-10 ** 400), "f_ref"),
 ]
 
 
@@ -178,6 +182,7 @@ CLI_CASES = [  # the ones tests/test_cli_evolve.py does not already cover
     (["--atol", "nan"], "atol"), (["--spin-orbit-order", "nan"], "spin_orbit_order"),
     (["--spin-spin-order", "0.25"], "spin_spin_order"), (["--sampling", "0"], "sampling"),
     (["--sampling", "nan"], "sampling"), (["--sampling", "per_orbit:2.5"], "sampling"),
+    (["--sampling", "per_orbit:" + "9" * 401], "sampling per_orbit"), (["--sampling", "per_orbit:²"], "per_orbit:N"),
 ]
 
 

@@ -343,11 +343,45 @@ def test_per_orbit_times_are_the_roots_of_the_interpolated_phase(forward):
 def test_per_orbit_runs_use_the_one_compiled_root_finder():
     """The per-orbit kernel compiled ahead by compile_output_kernel (beside the DOP853 core, on a cold cache) has
     the types every run gives it: precessing and aligned, forward and backward, one compiled signature."""
-    from pnrotor.pn.sampling import _fill_history, _phase_roots
+    from pnrotor.pn.sampling import _phase_roots
 
     for args in ((30, 10, [0.5, 0.1, 0.3], [0.0, 0.4, -0.2], 100.0), (1.4, 1.4, [0, 0, 0.1], [0, 0, 0], 300.0)):
         evolve(*args, f_min=0.8 * args[4], sampling=("per_orbit", 3))
-    assert len(_phase_roots.signatures) == 1 and len(_fill_history.signatures) == 1
+    assert len(_phase_roots.signatures) == 1
+
+
+@pytest.mark.parametrize("sampling", [1 / 4096, ("per_orbit", 4)])
+def test_a_half_without_a_step_samples_as_steps_does(sampling):
+    """A run whose integration takes no step (a step underflow at once) gives its one state at t = 0 under uniform
+    and per-orbit sampling as under 'steps' (it raised AttributeError: no dense output); a forward half without a
+    step beside a backward half with steps gives the backward samples and the initial state, as when the forward
+    half had steps."""
+    import dataclasses
+
+    from pnrotor.pn.evolve import _OPTIONS, build_system, integrate_half
+    from pnrotor.pn.sampling import sample
+    from pnrotor.pn.settings import settings
+
+    args = (1.4, 1.4, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], 30.0)
+    for kw in ({}, {"f_min": 25.0}):
+        steps = evolve(*args, atol=1e-200, **kw)
+        run = evolve(*args, atol=1e-200, sampling=sampling, **kw)
+        assert len(run) == len(steps) == 1 and run.termination == "step_underflow"
+        for name in ("t", "v", "Phi", "chi1", "chi2", "R", "ell_hat"):
+            np.testing.assert_array_equal(getattr(run, name), getattr(steps, name))
+    s = settings(30.0, 10.0, (0.5, 0.1, 0.3), (0.0, 0.4, -0.2), 100.0,
+                 **{**_OPTIONS, "f_min": 70.0, "sampling": sampling})
+    system = build_system(s)
+    backward, _ = integrate_half(s, system, False, None, True)
+    forward, _ = integrate_half(s, system, True, None, True)
+    stuck, _ = integrate_half(dataclasses.replace(s, atol=1e-200), system, True, None, True)
+    assert stuck.dense is None and backward.dense is not None
+    t_all, rows_all = sample(s, forward, backward)
+    t, rows = sample(s, stuck, backward)
+    assert t[-1] == 0.0 and len(t) > 2
+    np.testing.assert_array_equal(t, t_all[:len(t)])
+    for got, full in zip(rows, rows_all):
+        np.testing.assert_array_equal(got, full[:len(t)])
 
 
 def test_sampling_modes_agree():

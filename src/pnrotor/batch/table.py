@@ -48,7 +48,7 @@ def parse_sampling(value, name="--sampling"):
         return text
     if text.startswith("per_orbit:"):
         count = text.partition(":")[2].strip()
-        if not count.isdigit() or int(count) < 1:
+        if not (count.isascii() and count.isdigit()) or int(count) < 1:   # '²'.isdigit() is True
             raise ValueError(f"{name} per_orbit:N needs a positive integer N, got {value!r}")
         return ("per_orbit", int(count))
     try:

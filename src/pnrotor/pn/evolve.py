@@ -379,8 +379,9 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
 def check_inputs(m1, m2, chi1, chi2, f_ref, **options):
     """:func:`evolve`'s checks of its arguments (its first stage, :func:`~pnrotor.pn.settings.settings`), without
     running anything compiled: the ValueError ``evolve`` would raise first for them, or None.  The CLI calls it
-    before it says it is compiling and starts compiling (a cold cache is no reason to wait for an input error);
-    one check needs the compiled set-up and stays in ``evolve``: whether f_ref is past the end of the inspiral."""
+    before it says it is compiling and starts compiling (a cold cache is no reason to wait for an input error).
+    Two checks need more and stay in ``evolve``: whether f_ref is past the end of the inspiral (the compiled set-up)
+    and whether a uniform or per-orbit sampling fits in memory (the integrated span)."""
     settings(m1, m2, chi1, chi2, f_ref, **{**_OPTIONS, **options})
 
 

@@ -50,7 +50,7 @@ def _positive(x, unit, name, what):
         if isinstance(x, _BOOLS):
             raise TypeError
         x = float(x)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):   # OverflowError: an int beyond any float (10**400)
         raise ValueError(f"{name} must be a finite positive {what}, got {x!r}") from None
     if not math.isfinite(x) or x <= 0.0:
         raise ValueError(f"{name} must be a finite positive {what}, got {x!r}")

@@ -321,10 +321,12 @@ def sample(s, res_f, res_b):
     fixed = _fixed(s)
     if s.sampling in ("final", "steps"):
         return _sample_steps(s.sampling, mode, fixed, res_f, res_b)
+    if res_b is not None and res_b.dense is None:
+        res_b = None   # a backward half that took no step has no sample but t = 0, the forward half's
     if s.sampling == "dt":
         dt = s.sampling_value / s.M_sec
-        _check_memory((res_f.dense.t_max - (0.0 if res_b is None else res_b.dense.t_max)) / dt, s)
-        t_out, nb = _uniform_times(dt, res_f, res_b)
+        _check_memory((_t_end(res_f) - (0.0 if res_b is None else _t_end(res_b))) / dt, s)
+        t_out, nb = _uniform_times(dt, _t_end(res_f), None if res_b is None else _t_end(res_b))
     else:
         phi_i = _sys.YA_PHI if s.use_aligned else _sys.Y_PHI
         _check_memory((res_f.y[-1, phi_i] - (0.0 if res_b is None else res_b.y[-1, phi_i]))
@@ -335,8 +337,17 @@ def sample(s, res_f, res_b):
         d = res_b.dense   # backward samples: visited from t = 0 downwards, the direction of integration
         _fill_history(mode, d.seg_t, d.seg_h, d.coef, t_out[:nb], True, _NO_Y, *fixed, 0, *hist)
     d = res_f.dense
-    _fill_history(mode, d.seg_t, d.seg_h, d.coef, t_out[nb:], False, _NO_Y, *fixed, nb, *hist)
+    if d is None:   # no step taken forward (a step underflow at once, max_steps = 1): the state at t = 0 alone
+        _fill_history(mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, np.ascontiguousarray(res_f.y[:1]), *fixed, nb,
+                      *hist)
+    else:
+        _fill_history(mode, d.seg_t, d.seg_h, d.coef, t_out[nb:], False, _NO_Y, *fixed, nb, *hist)
     return t_out, _constant_rows(hist, mode, fixed, t_out.size)
+
+
+def _t_end(res):
+    """Where a half's integration ended (0 if it took no step)."""
+    return 0.0 if res.dense is None else res.dense.t_max
 
 
 def _sample_steps(sampling, mode, fixed, res_f, res_b):
@@ -354,15 +365,16 @@ def _sample_steps(sampling, mode, fixed, res_f, res_b):
     return t_out, _constant_rows(hist, mode, fixed, t_out.size)
 
 
-def _uniform_times(dt, res_f, res_b):
-    """(t = kΔt for every k within the integrated span, ascending; how many are before t = 0)."""
-    k_hi = math.floor(res_f.dense.t_max / dt * (1.0 + 1e-15))
-    while k_hi * dt > res_f.dense.t_max:
+def _uniform_times(dt, t_forward, t_backward):
+    """(t = kΔt for every k within the integrated span [t_backward or 0, t_forward], ascending; how many are before
+    t = 0)."""
+    k_hi = math.floor(t_forward / dt * (1.0 + 1e-15))
+    while k_hi * dt > t_forward:
         k_hi -= 1
     k_lo = 0
-    if res_b is not None:
-        k_lo = math.ceil(res_b.dense.t_max / dt * (1.0 + 1e-15))
-        while k_lo * dt < res_b.dense.t_max:
+    if t_backward is not None:
+        k_lo = math.ceil(t_backward / dt * (1.0 + 1e-15))
+        while k_lo * dt < t_backward:
             k_lo += 1
     t_out = np.arange(k_lo, k_hi + 1, dtype=np.float64)
     t_out *= dt                                   # one allocation: t = k Δt, ascending
@@ -373,7 +385,8 @@ def _orbit_times(per_orbit, phi_i, res_f, res_b):
     """(the times where Φ = 2πj/n within the integrated span, ascending; how many are before t = 0)."""
     step = 2.0 * math.pi / per_orbit
     phi_end = res_f.y[-1, phi_i]
-    tf = _phase_times(res_f.dense, phi_i, np.arange(0, math.floor(phi_end / step) + 1) * step)
+    tf = np.zeros(1) if res_f.dense is None else \
+        _phase_times(res_f.dense, phi_i, np.arange(0, math.floor(phi_end / step) + 1) * step)
     tf[0] = 0.0
     if res_b is not None:
         phi_start = res_b.y[-1, phi_i]

@@ -290,6 +290,10 @@ def _order(x, name, lo, hi):
     return x
 
 
+MAX_PER_ORBIT = 2 ** 53
+"""The largest number of samples per orbit taken (exact as a float; the memory check refuses far fewer)."""
+
+
 def parse_sampling(sampling):
     """→ ('steps', None) | ('final', None) | ('dt', seconds) | ('per_orbit', n)."""
     if isinstance(sampling, str):
@@ -311,8 +315,8 @@ def parse_sampling(sampling):
         if key == "dt":
             return "dt", _ini.seconds(val, "sampling dt")
         if key == "per_orbit":
-            if not (_ini._real(val) and math.isfinite(val) and val >= 1 and val == int(val)):
-                raise ValueError(f"sampling per_orbit must be a positive integer, got {val!r}")
+            if not (_ini._real(val) and 1 <= val <= MAX_PER_ORBIT and val == int(val)):   # no NaN, inf, 10**400
+                raise ValueError(f"sampling per_orbit must be an integer from 1 to 2^53, got {val!r}")
             return "per_orbit", int(val)
         raise ValueError(f"unknown sampling key {key!r}; use 'dt' or 'per_orbit'")
     # a bare number or Quantity: Δt in seconds
