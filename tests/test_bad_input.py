@@ -73,6 +73,34 @@ def test_evolve_rejects(kw, name):
         pnrotor.evolve(**{**GOOD, **kw})
 
 
+@pytest.mark.parametrize("approximant", ["T1", "T4", "T5"])
+def test_f_ref_beyond_the_end_of_the_inspiral_is_refused_where_the_events_are_positive_again(approximant):
+    """The start check refuses an f_ref past the end of the inspiral (pnrotor.pn.system.inspiral_end: the first v
+    where an event fails), also beyond the band where the events are negative (the PN series turn positive again at
+    higher v: a review found f_ref = 1000 Hz accepted for an aligned 30 + 10 binary whose inspiral ends at 455 Hz),
+    with the same bound in the message; just below the end it runs, to that end."""
+    from pnrotor.pn.initial import frequency_from_v, total_mass_seconds
+    from pnrotor.pn.series import basis_values, kmax_from_orders
+    from pnrotor.pn.system import inspiral_end
+
+    m1, m2, a1, a2 = 30.0, 10.0, 0.5, -0.3
+    X1 = m1 / (m1 + m2)
+    v_end = inspiral_end(X1, approximant, kmax_from_orders(3.5, 3.5, 3.0),
+                         basis_values(a1, a2, a1 * a2, a1 * a1, a2 * a2))
+    f_end = frequency_from_v(v_end, total_mass_seconds(m1, m2))
+    kw = dict(m1=m1, m2=m2, chi1=(0.0, 0.0, a1), chi2=(0.0, 0.0, a2), approximant=approximant, sampling="final")
+    run = pnrotor.evolve(**kw, f_ref=0.99 * f_end)
+    assert run.v[-1] <= v_end * (1 + 1e-9)
+    f_v1 = frequency_from_v(1.0, total_mass_seconds(m1, m2))
+    beyond = [f for f in np.geomspace(1.01 * f_end, 3000.0, 40) if f < f_v1]
+    positive_again = 0
+    for f in beyond:
+        with pytest.raises(ValueError, match=f"f_ref must be below {f_end:.6g} Hz"):
+            pnrotor.evolve(**kw, f_ref=f)
+        positive_again += "is beyond" in str(pytest.raises(ValueError, pnrotor.evolve, **kw, f_ref=f).value)
+    assert positive_again > 0   # the case the review found is among them
+
+
 def test_check_inputs_raises_what_evolve_raises_without_compiled_code():
     """pnrotor.pn.evolve.check_inputs (what the CLI runs before compiling) refuses every case above with evolve's
     own message, but the one whose check needs the compiled set-up (f_ref past the end of the inspiral)."""

@@ -216,17 +216,20 @@ def population_parts(s, X1, kappa1, kappa2):
                                        _omega_l(s))
 
 
-def _check_start(s, kmax, bvals, n0, d0, e0, peak0):
-    """A ValueError naming f_ref and its bound if N, D, Ê′ or event 6 at v₀ say the inspiral has ended."""
+def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
+    """A ValueError naming f_ref and its bound if N, D, Ê′ or event 6 at v₀ say the inspiral has ended, or if one
+    of them does at a lower v (``ended``, :func:`pnrotor.pn.system._store_series`)."""
     why = ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
            else "dv/dt <= 0" if not n0 * d0 > 0.0
            else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS
            else "the orbital frequency no longer accelerates (d2(omega)/dt2 <= 0)" if not peak0 > 0.0 else None)
-    if why:
+    if why or ended:
         v_end = _sys.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2)
-        raise ValueError(f"f_ref = {s.f_ref} Hz is past the end of the {s.approximant} inspiral: {why} at "
-                         f"v = {s.v0:.4g}; for these masses and spins f_ref must be below "
-                         f"{_ini.frequency_from_v(v_end, s.M_sec):.6g} Hz (v = {v_end:.6g})")
+        why = f"{why} at v = {s.v0:.4g}" if why else \
+            f"it ended at a lower v (v = {v_end:.4g}) and v = {s.v0:.4g} is beyond"
+        raise ValueError(f"f_ref = {s.f_ref} Hz is past the end of the {s.approximant} inspiral: {why}; for these "
+                         f"masses and spins f_ref must be below {_ini.frequency_from_v(v_end, s.M_sec):.6g} Hz "
+                         f"(v = {v_end:.6g})")
 
 
 # ---------------------------------------------------------------------------------------------------
