@@ -1,5 +1,6 @@
 """pnrotor.pn.evolve_many against single evolve calls: bitwise the same end states, binary by binary."""
 
+import astropy.units as u
 import numba
 import numpy as np
 import pytest
@@ -103,15 +104,25 @@ def test_results_do_not_depend_on_the_number_of_threads():
 
 
 @pytest.mark.parametrize("call, match", [
-    (lambda: evolve_many([], [], np.zeros((0, 3)), np.zeros((0, 3)), 20.0), "m1, m2 and f_ref"),
-    (lambda: evolve_many([30, 20], [10, 10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1, m2 and f_ref"),
-    (lambda: evolve_many([30, 20], [10, 10], np.zeros((3, 3)), [0, 0, 0], 20.0), "chi1 must have shape"),
+    (lambda: evolve_many([], [], np.zeros((0, 3)), np.zeros((0, 3)), 20.0), "m1 has no binary"),
+    (lambda: evolve_many([30, 20], [10, 10, 10], [0, 0, 0], [0, 0, 0], 20.0), "same length N .* got m1 2, m2 3"),
+    (lambda: evolve_many([30, 20], [10, 10], np.zeros((3, 3)), [0, 0, 0], 20.0), "got m1 2, m2 2, chi1 3"),
     (lambda: evolve_many([True, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
     (lambda: evolve_many(np.array([1, 0], bool), [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, np.True_], [0, 0, 0], 20.0), "chi1 must be numbers"),
     (lambda: evolve_many(["abc", 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
     (lambda: evolve_many([30, 20], [10, 10], [[0, 0, 0], [0, 0]], [0, 0, 0], 20.0), "chi1 must be numbers"),
-    (lambda: evolve_many([[30], [20, 1]], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "got shapes ragged"),
+    (lambda: evolve_many([[30], [20, 1]], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
+    # a review of 2026-11-27 (fifth session): (N, 1) spins were broadcast to (N, 3), complex masses ran as real,
+    # Quantities of parameters without units lost them
+    (lambda: evolve_many([30, 20], [10, 10], [[0.1], [0.2]], [0, 0, 0], 20.0), r"chi1 must have shape .* \(2, 1\)"),
+    (lambda: evolve_many([30 + 1j, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
+    (lambda: evolve_many([30, 20], 10, [0, 0, 0], [0, 0, 0], 20.0, kappa1=[1, 1, 1]), "got m1 2, kappa1 3"),
+    (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, frequencies=np.ones((3, 2)) * 30),
+     "got m1 2, m2 2, frequencies 3"),
+    (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0 * u.m), "f_ref must be numbers .* to Hz"),
+    (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, kappa1=1.0 * u.one),
+     "kappa1 must be numbers, not an astropy Quantity"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, atol=-1.0), "atol"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, approximant="T3"), "approximant"),
 ])
@@ -207,7 +218,7 @@ def test_targets_and_binaries_evolve_refuses_are_refused_alone():
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"frequencies": [30.0], "f_end": 30.0}, "not both"),
-    ({"frequencies": np.ones((3, 2)) * 30}, r"frequencies must have shape \(K,\) or \(N, K\)"),
+    ({"frequencies": np.ones((3, 2)) * 30}, "got m1 2, m2 2, frequencies 3"),
     ({"frequencies": []}, "K >= 1"),
     ({"frequencies": [30.0, "abc"]}, "frequencies must be numbers"), ({"frequencies": [True]}, "frequencies must be"),
     ({"frequencies": [[30.0], [30.0, 40.0]]}, "frequencies must be numbers"),
@@ -255,3 +266,49 @@ def test_a_target_an_ulp_from_f_ref_is_refused_as_evolve_refuses_it():
     alone = evolve_many([30.0], *args[1:], frequencies=[up, 10.0])
     assert list(alone.termination[0]) == ["invalid", "f_min"]
     np.testing.assert_array_equal(alone.chi1[0, 1], pop.chi1[0, 2])
+
+
+def test_quantities_and_shared_masses_give_the_same_population():
+    """Masses and frequencies as astropy Quantities (M_sun, grams; Hz, kHz) give the population of their values in
+    M_sun and Hz, each binary bitwise what evolve gives for the same Quantities (they lost their units: 0.03 kHz
+    was read as 0.03 Hz, a backward run); N comes from any per-binary input (scalar masses and f_ref with (N, 3)
+    spins raised), 1 when every input is shared."""
+    table = _table(4, 3)
+    m1, m2, c1, c2 = table[:4]
+    plain = evolve_many(m1, m2, c1, c2, 20.0, frequencies=[30.0, 15.0])
+    with_units = evolve_many(m1 * u.M_sun, m2 * u.M_sun, c1, c2, 0.02 * u.kHz, frequencies=[30.0, 15.0] * u.Hz)
+    for k in FIELDS + ("t", "t_seconds", "termination"):
+        np.testing.assert_array_equal(getattr(with_units, k), getattr(plain, k), err_msg=k)
+    assert plain.termination[0].tolist() == ["f_max", "f_min"]
+    grams = evolve_many((m1 * u.M_sun).to(u.g), m2, c1, c2, 20.0, f_end=0.03 * u.kHz)
+    single = evolve((m1[0] * u.M_sun).to(u.g), m2[0], c1[0], c2[0], 20.0, f_max=0.03 * u.kHz, sampling="final")
+    assert grams.termination[0] == "f_max" and grams.t[0] == single.t[-1]
+    for k in FIELDS:
+        np.testing.assert_array_equal(getattr(grams, k)[0], getattr(single, k)[-1], err_msg=k)
+    shared = evolve_many(30.0, 10.0, c1, c2, 20.0)
+    one_by_one = evolve_many([30.0] * 4, [10.0] * 4, c1, c2, [20.0] * 4)
+    alone = evolve_many(30.0, 10.0, c1[2], c2[2], 20.0)
+    assert len(shared) == 4 and len(alone) == 1
+    for k in FIELDS + ("t", "termination"):
+        np.testing.assert_array_equal(getattr(shared, k), getattr(one_by_one, k), err_msg=k)
+        np.testing.assert_array_equal(getattr(alone, k)[0], getattr(one_by_one, k)[2], err_msg=k)
+
+
+def test_an_invalid_binarys_refused_targets_get_the_message_evolve_gives_first():
+    """A binary evolve refuses (|chi1| > 1, or f_ref past the end of its inspiral) with a list holding refused
+    targets: each entry says what evolve with that target says first, in the order of its checks (the target's
+    finiteness before the spins; the spins before the target's range; the target's range before the start check).
+    Every entry carried the binary's message."""
+    targets = [-1.0, 30.0, 1e4]
+    pop = evolve_many([30.0, 30.0], [10.0, 10.0], [[0, 0, 1.5], [0, 0, 0.5]], [[0, 0, 0], [0, 0, -0.3]],
+                      [20.0, 1000.0], frequencies=targets)
+    assert pop.termination.tolist() == [["invalid"] * 3] * 2
+    for i, (chi1, chi2, f_ref) in enumerate((([0, 0, 1.5], [0, 0, 0], 20.0), ([0, 0, 0.5], [0, 0, -0.3], 1000.0))):
+        for k, f in enumerate(targets):
+            side = "f_min" if f < f_ref else "f_max"
+            with pytest.raises(ValueError) as refusal:
+                evolve(30.0, 10.0, chi1, chi2, f_ref, **{side: f})
+            assert pop.message[i, k] == str(refusal.value).replace(side, f"frequencies[{k}]"), (i, k)
+    assert pop.message[0, 0].startswith("frequencies[0] must be a finite positive")
+    assert pop.message[0, 2].startswith("|chi1| = 1.5") and pop.message[1, 1].startswith("f_ref = 1000.0 Hz is past")
+    assert pop.message[1, 2].startswith("frequencies[2] = 10000.0 Hz gives v")

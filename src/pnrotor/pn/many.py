@@ -32,6 +32,7 @@ Newtonian time, :func:`~pnrotor.pn.evolve.half`); a single run that hit its own 
 
 import gc
 import math
+import sys
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -175,26 +176,55 @@ def _nearer_targets(events, p_run, v_target, direction, seg_t, seg_h, seg_c, iv,
     return t_final, final, iv[IV_STATUS], iv[IV_EVENT]
 
 
-def _per_binary(x, n, name, shape=()):
-    """x broadcast to (n,) + shape as float64, or a ValueError naming the parameter (booleans refused, as
-    ``evolve`` refuses them)."""
+def _per_binary(x, n, name, shape=(), unit=None):
+    """x as float64 of shape (n,) + shape, from that shape or ``shape`` alone (one value for every binary), or a
+    ValueError naming the parameter (booleans, text and complex numbers refused, as ``evolve`` refuses them; an
+    astropy Quantity converted to ``unit``, and refused where the parameter has none)."""
     want = "(N,) or a scalar" if not shape else f"(N, {shape[0]}) or ({shape[0]},)"
-    a = _numbers(x, name, f"{want} with N = {n} binaries")
-    try:
-        return np.ascontiguousarray(np.broadcast_to(a, (n,) + shape))
-    except ValueError:
-        raise ValueError(f"{name} must have shape {want} with N = {n} binaries, got {a.shape}") from None
+    a = _numbers(x, name, f"{want} with N = {n} binaries", unit)
+    if a.shape not in (shape, (n,) + shape):
+        raise ValueError(f"{name} must have shape {want} with N = {n} binaries, got {a.shape}")
+    return np.ascontiguousarray(np.broadcast_to(a, (n,) + shape))
 
 
-def _numbers(x, name, shape):
+def _numbers(x, name, shape, unit=None):
     """x as a float64 array, or a ValueError naming it and the ``shape`` expected: booleans are refused, as
-    ``evolve`` refuses them, and so are text and ragged sequences."""
+    ``evolve`` refuses them, and so are text, complex numbers and ragged sequences; an astropy Quantity is
+    converted to ``unit`` (M_sun, Hz), or refused where there is none."""
+    u = sys.modules.get("astropy.units")   # a Quantity exists only if its module was imported
+    if u is not None and isinstance(x, u.Quantity):
+        if unit is None:
+            raise ValueError(f"{name} must be numbers, not an astropy Quantity ({x.unit})")
+        try:
+            x = x.to_value(getattr(u, unit))
+        except u.UnitsError:
+            raise ValueError(f"{name} must be numbers (in {unit}) or an astropy Quantity convertible to {unit}, "
+                             f"got {x.unit}") from None
     try:
-        if _has_bool(x):
+        if _has_bool(x) or np.iscomplexobj(x):
             raise TypeError
         return np.asarray(x, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be numbers (not booleans or text) of shape {shape}") from None
+        raise ValueError(f"{name} must be numbers (real: not booleans, text or complex) of shape {shape}") from None
+
+
+def _population_size(scalars, rows, lists):
+    """N, the number of binaries: the length of every (N,) per-binary value in ``scalars``, (N, 3) one in ``rows``
+    and (N, K) one in ``lists`` (the frequencies), which must agree; 1 if every value is shared.  A ValueError
+    names the values that disagree."""
+    sizes = {}
+    for group, ndim in ((scalars, 1), (rows, 2), (lists, 2)):
+        for name, x in group.items():
+            shape = _shape(x)
+            if shape != "ragged" and len(shape) == ndim:
+                sizes[name] = shape[0]
+    if len(set(sizes.values())) > 1:
+        raise ValueError("the per-binary inputs must all have the same length N (one per binary), got "
+                         + ", ".join(f"{name} {n}" for name, n in sizes.items()))
+    n = next(iter(sizes.values()), 1)
+    if n == 0:
+        raise ValueError(f"{next(iter(sizes))} has no binary: N must be at least 1")
+    return n
 
 
 def _has_bool(x):
@@ -217,10 +247,10 @@ def _shape(x):
 def _target_table(f_end, frequencies, n):
     """(N, K) target frequencies (NaN: to the end of the inspiral) and whether the outputs keep the K axis."""
     if frequencies is None:
-        return _per_binary(np.nan if f_end is None else f_end, n, "f_end")[:, None], False
+        return _per_binary(np.nan if f_end is None else f_end, n, "f_end", unit="Hz")[:, None], False
     if f_end is not None:
         raise ValueError("give f_end (one state per binary) or frequencies (a list of them), not both")
-    f = _numbers(frequencies, "frequencies", f"(K,) or (N, K) with N = {n} binaries")
+    f = _numbers(frequencies, "frequencies", f"(K,) or (N, K) with N = {n} binaries", "Hz")
     if f.ndim == 1:
         f = np.broadcast_to(f, (n, f.size))
     if f.ndim != 2 or f.shape[0] != n or f.shape[1] == 0:
@@ -275,6 +305,18 @@ def _collector_paused():
             gc.enable()
 
 
+def _first_error(opts, m1, m2, chi1, chi2, f_ref, f, ell_hat, n_hat, kappa1, kappa2):
+    """The message of the first check ``evolve``'s settings fail for this binary with the target f as f_max (f_min
+    below f_ref), or None: for a binary that is invalid, its own message unless the target's check comes first."""
+    backward = f < f_ref
+    try:
+        binary_settings(opts, m1, m2, chi1, chi2, f_ref, f if backward else None, None if backward else f, ell_hat,
+                        n_hat, kappa1, kappa2)
+    except ValueError as e:
+        return str(e)
+    return None
+
+
 def _refused_targets(f, m1, m2, f_ref):
     """{k: message} of the listed frequencies that ``evolve`` would refuse as f_max or f_min for a binary it
     accepts, by the same check (:func:`~pnrotor.pn.settings.target_v`: v beyond v at f_ref, and within the PN
@@ -303,7 +345,9 @@ def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_
     Parameters
     ----------
     m1, m2, f_ref : array_like (N,) or scalar
-        Masses (M☉) and reference GW frequencies (Hz), as for :func:`~pnrotor.pn.evolve.evolve`.
+        Masses (M☉) and reference GW frequencies (Hz), as for :func:`~pnrotor.pn.evolve.evolve` (astropy
+        Quantities are converted).  N is the length of the inputs given per binary (these, the spins, f_end, …,
+        which must agree), 1 if every input is shared.
     chi1, chi2 : array_like (N, 3) or (3,)
         Spins at f_ref, inertial frame.
     f_end : None, scalar or array_like (N,)
@@ -327,15 +371,10 @@ integrate_rotor, precession, max_steps
     options or array shapes raise a ValueError; an invalid binary does not (module docstring).
     """
     wall0 = time.perf_counter()
-    try:
-        shape = np.broadcast_shapes(np.shape(m1), np.shape(m2), np.shape(f_ref))
-    except ValueError:
-        shape = ()
-    if len(shape) != 1 or shape[0] == 0:
-        raise ValueError(f"m1, m2 and f_ref must be 1-D arrays of the same length N >= 1 (one per binary) or "
-                         f"scalars, got shapes {_shape(m1)}, {_shape(m2)}, {_shape(f_ref)}")
-    n = shape[0]
-    m1a, m2a, fref = (_per_binary(x, n, name) for x, name in ((m1, "m1"), (m2, "m2"), (f_ref, "f_ref")))
+    n = _population_size(dict(m1=m1, m2=m2, f_ref=f_ref, kappa1=kappa1, kappa2=kappa2, f_end=f_end),
+                         dict(chi1=chi1, chi2=chi2, ell_hat=ell_hat, n_hat=n_hat), dict(frequencies=frequencies))
+    m1a, m2a, fref = (_per_binary(x, n, name, unit=unit) for x, name, unit in
+                      ((m1, "m1", "M_sun"), (m2, "m2", "M_sun"), (f_ref, "f_ref", "Hz")))
     targets, listed = _target_table(f_end, frequencies, n)
     K = targets.shape[1]
     k1, k2 = _per_binary(kappa1, n, "kappa1"), _per_binary(kappa2, n, "kappa2")
@@ -386,6 +425,10 @@ integrate_rotor, precession, max_steps
                     system = build_system(s, tuple(x[i - start] for x in parts))
                 except ValueError as e:
                     out.message[i * K:(i + 1) * K] = str(e)
+                    for k, why in skip.items():   # a refused target whose check comes first in evolve's order
+                        if _first_error(opts, m1l[i], m2l[i], c1l[i], c2l[i], fr, f[k], elll[i], nhl[i], k1l[i],
+                                        k2l[i]) not in (None, str(e)):
+                            out.message[i * K + k] = why
                     continue
                 for k, why in skip.items():
                     out.message[i * K + k] = why
