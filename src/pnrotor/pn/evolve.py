@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..ode import EVENTS_SIG, RHS_SIG, by_address
-from ..ode.dop853 import OUT_FINAL, OUT_STEPS, _controller, _default_hook, _integrate
+from ..ode.dop853 import OUT_FINAL, OUT_STEPS, _controller, _default_hook, _function_addresses, _integrate
 from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
 from . import initial as _ini
@@ -191,7 +191,6 @@ def build_system(s, parts=None):
         phase_shift=s.precession_phase_shift,
         aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
         parts=parts)
-    _check_start(s, kmax, bvals, *at_v0)
     if s.use_aligned:
         rhs, events = _sys.rhs_aligned, _sys.events_aligned
         y0 = np.array([s.v0, 0.0])
@@ -200,7 +199,9 @@ def build_system(s, parts=None):
         events = _sys.events_precessing
         y0 = np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0])   # [v, χ₁, χ₂, R, Φ]
     # they cannot raise (error_model='numpy'), so they may go to the integrator by address
-    return System(by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG), p, y0, kmax, bvals)
+    events = by_address(events, EVENTS_SIG)
+    _check_start(s, kmax, bvals, *at_v0, _sys.earlier_end(_function_addresses(events), y0, p))
+    return System(by_address(rhs, RHS_SIG), events, p, y0, kmax, bvals)
 
 
 def _omega_l(s):
@@ -218,7 +219,7 @@ def population_parts(s, X1, kappa1, kappa2):
 
 def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
     """A ValueError naming f_ref and its bound if N, D, Ê′ or event 6 at v₀ say the inspiral has ended, or if one
-    of them does at a lower v (``ended``, :func:`pnrotor.pn.system._store_series`)."""
+    of them does at a lower v (``ended``, :func:`pnrotor.pn.system.earlier_end`)."""
     why = ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
            else "dv/dt <= 0" if not n0 * d0 > 0.0
            else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS

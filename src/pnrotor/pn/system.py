@@ -80,6 +80,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..ode.dop853 import _events_function
 from .energy import energy_derivative_series, energy_series
 from .flux import flux_series
 from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms, spin_orbit_precession,
@@ -447,16 +448,9 @@ def _vdot_series(E_raw, F_raw, kmax, approx):
     return one, divide(Ep, F, kmax), Ep
 
 
-_SCAN_FROM, _SCAN_POINTS = 0.05, 64
-"""The grid below v₀ on which :func:`_store_series` looks for an earlier end of the inspiral."""
-
-
 @njit(cache=True)
 def _store_series(N, D, Ep, basis, fold, p, v0):
-    """Store N, D, Ê′ (folded for the aligned RHS) in p; return N, D, Ê′ and event 6 at v0, and the smallest v
-    of a geometric grid from 0.05 to v0 (64 points) where event 1, 2, 5 or 6 is ≤ 0 (0.0 if none): a v0 beyond
-    such a v lies past the end of the inspiral even where the events are positive again (a review found f_ref =
-    1000 Hz accepted for an aligned 30 + 10 M☉ binary whose inspiral ends at 455 Hz, while 600 Hz was refused)."""
+    """Store N, D, Ê′ (folded for the aligned RHS) in p; return N, D, Ê′ and event 6 at v0."""
     # offsets as np.int64: a plain constant would compile fold_and_store once per offset (Literal[int])
     fold_and_store(N, basis, fold, p, np.int64(P_NUM))
     fold_and_store(D, basis, fold, p, np.int64(P_DEN))
@@ -464,21 +458,37 @@ def _store_series(N, D, Ep, basis, fold, p, v0):
     Nv, Dv = v_derivative(N), v_derivative(D)
     n0, d0 = eval_at(N, v0, basis), eval_at(D, v0, basis)
     peak0 = vdot_peak(n0, d0, eval_at(Nv, v0, basis), eval_at(Dv, v0, basis))
-    ended = 0.0
-    if v0 > _SCAN_FROM:
-        ratio = (v0 / _SCAN_FROM) ** (1.0 / _SCAN_POINTS)
-        v = _SCAN_FROM
-        b = basis
-        for _ in range(_SCAN_POINTS):   # the events' series as the right-hand side evaluates them
-            lnv = math.log(v)
-            n, n_v = eval_series(p, P_NUM, v, lnv, not fold, b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8])
-            d, d_v = eval_series(p, P_DEN, v, lnv, not fold, b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8])
-            e = eval_series(p, P_EP, v, lnv, not fold, b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8])[0]
-            if not (e > 0.0 and n * d > 0.0 and d > DEN_EPS and vdot_peak(n, d, n_v, d_v) > 0.0):
-                ended = v
-                break
-            v *= ratio
-    return n0, d0, eval_at(Ep, v0, basis), peak0, ended
+    return n0, d0, eval_at(Ep, v0, basis), peak0
+
+
+_SCAN_FROM, _SCAN_POINTS = 0.05, 64
+"""The grid below v₀ on which :func:`earlier_end` looks for an end of the inspiral."""
+
+
+@njit(cache=True)
+def earlier_end(events, y0, p):
+    """The smallest v of a geometric grid from 0.05 to v₀ = y0[0] (64 points) where event 1, 2, 5 or 6 of the
+    system's ``events`` (:data:`pnrotor.ode.dop853.FUNCTIONS_LAYOUT` addresses of one function) at the state y0
+    with that v is ≤ 0, else 0.0: a v₀ beyond it lies past the end of the inspiral, even where the events are
+    positive again at v₀ (a review found f_ref = 1000 Hz accepted for an aligned 30 + 10 M☉ binary whose inspiral
+    ends at 455 Hz, while 600 Hz was refused).  The events are the run's own compiled function, called by
+    address: one small kernel for every system (0.3–0.5 s to compile, measured)."""
+    v0 = y0[Y_V]
+    if not v0 > _SCAN_FROM:
+        return 0.0
+    g = _events_function(events[0], events[1])
+    y = y0.copy()
+    values = np.empty(N_EVENTS)
+    ratio = (v0 / _SCAN_FROM) ** (1.0 / _SCAN_POINTS)
+    v = _SCAN_FROM
+    for _ in range(_SCAN_POINTS):
+        y[Y_V] = v
+        g(0.0, y, p, values)
+        if not (values[EV_ENERGY] > 0.0 and values[EV_VDOT] > 0.0 and values[EV_POLE] > 0.0
+                and values[EV_VDOT_PEAK] > 0.0):
+            return v
+        v *= ratio
+    return 0.0
 
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
