@@ -64,6 +64,11 @@ EVOLVE_CASES = [
     (dict(sampling=("per_orbit", 10 ** 400)), "sampling per_orbit"), (dict(sampling=("dt", 10 ** 400)), "sampling"),
     (dict(sampling=("per_orbit", 1e300)), "sampling per_orbit"), (dict(sampling=("per_orbit", 2 ** 53 + 1)), "2\\^53"),
     (dict(m1=10 ** 400), "m1"), (dict(f_ref=-10 ** 400), "f_ref"),
+    (dict(chi1=(10 ** 400, 0, 0)), "chi1"), (dict(chi2=(0, 10 ** 400, 0)), "chi2"), (dict(ell_hat=(0, 0, 10 ** 400)),
+                                                                                    "ell_hat"),
+    (dict(n_hat=(10 ** 400, 0, 0)), "n_hat"), (dict(kappa1=10 ** 400), "kappa1"), (dict(atol=10 ** 400), "atol"),
+    (dict(rtol=10 ** 400), "rtol"), (dict(pn_order=10 ** 400), "pn_order"), (dict(spin_orbit_order=10 ** 400),
+                                                                              "spin_orbit_order"),
 ]
 
 
@@ -99,6 +104,36 @@ def test_f_ref_beyond_the_end_of_the_inspiral_is_refused_where_the_events_are_po
             pnrotor.evolve(**kw, f_ref=f)
         positive_again += "is beyond" in str(pytest.raises(ValueError, pnrotor.evolve, **kw, f_ref=f).value)
     assert positive_again > 0   # the case the review found is among them
+
+
+def test_the_start_check_agrees_with_inspiral_end_and_its_bound_lies_below_f_ref(monkeypatch):
+    """Aligned binaries (T1, T4, T5; χ up to ±0.99, κ 1 and 20) at v₀ from 0.1 to 0.95: evolve refuses exactly the
+    f_ref at or past inspiral_end's end (none of these has a band of failing events narrower than the start check's
+    grid, which can miss one: its docstring); and where the start check finds an end that inspiral_end's grid
+    misses (a review found such a band, 4e-4 wide in v), the bound in the message is the start check's, below
+    f_ref (it said 'below 1292.5 Hz' for f_ref = 570.7 Hz): inspiral_end made to miss here."""
+    from pnrotor.pn import system
+    from pnrotor.pn.initial import frequency_from_v, total_mass_seconds
+    from pnrotor.pn.series import basis_values, kmax_from_orders
+
+    for approximant in ("T1", "T4", "T5"):
+        for m1, m2, a1, a2, kappa in ((30.0, 10.0, 0.99, -0.5, 1.0), (1.4, 1.3, -0.99, 0.99, 20.0),
+                                      (20.0, 20.0, 0.3, 0.2, 1.0)):
+            b = basis_values(a1, a2, a1 * a2, a1 * a1, a2 * a2)
+            v_end = system.inspiral_end(m1 / (m1 + m2), approximant, kmax_from_orders(3.5, 3.5, 3.0), b, kappa,
+                                        kappa)
+            for v0 in np.linspace(0.1, 0.95, 18):
+                f = frequency_from_v(v0, total_mass_seconds(m1, m2))
+                kw = dict(chi1=(0.0, 0.0, a1), chi2=(0.0, 0.0, a2), kappa1=kappa, kappa2=kappa, sampling="final")
+                if v0 < v_end:
+                    pnrotor.evolve(m1, m2, f_ref=f, approximant=approximant, **kw)
+                else:
+                    with pytest.raises(ValueError, match="past the end"):
+                        pnrotor.evolve(m1, m2, f_ref=f, approximant=approximant, **kw)
+    monkeypatch.setattr(system, "inspiral_end", lambda *args: 1.0)
+    with pytest.raises(ValueError, match="it ended at a lower v") as refusal:
+        pnrotor.evolve(30.0, 10.0, (0.0, 0.0, 0.5), (0.0, 0.0, -0.3), 1000.0)
+    assert re.search(r"f_ref must be below 454\.6\d* Hz", str(refusal.value)), str(refusal.value)
 
 
 def test_check_inputs_raises_what_evolve_raises_without_compiled_code():

@@ -121,8 +121,11 @@ def test_results_do_not_depend_on_the_number_of_threads():
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, frequencies=np.ones((3, 2)) * 30),
      "got m1 2, m2 2, frequencies 3"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0 * u.m), "f_ref must be numbers .* to Hz"),
+    (lambda: evolve_many([30, 20] * u.one, 10, [0, 0, 0], [0, 0, 0], 20.0), "m1 must be .* in dimensionless"),
+    (lambda: evolve_many([10 ** 400, 20], 10, [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
+    (lambda: evolve_many([30, 20], 10, [0, 0, 0], [0, 0, 0], 20.0, f_end=10 ** 400), "f_end must be numbers"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, kappa1=1.0 * u.one),
-     "kappa1 must be numbers, not an astropy Quantity"),
+     "kappa1 must be numbers, got an astropy Quantity"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, atol=-1.0), "atol"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0, approximant="T3"), "approximant"),
 ])
@@ -287,6 +290,9 @@ def test_quantities_and_shared_masses_give_the_same_population():
         np.testing.assert_array_equal(getattr(grams, k)[0], getattr(single, k)[-1], err_msg=k)
     shared = evolve_many(30.0, 10.0, c1, c2, 20.0)
     one_by_one = evolve_many([30.0] * 4, [10.0] * 4, c1, c2, [20.0] * 4)
+    length_one = evolve_many([30.0], [10.0], c1, c2, [20.0])   # as numpy broadcasts (a review: refused for a while)
+    for k in FIELDS + ("t", "termination"):
+        np.testing.assert_array_equal(getattr(length_one, k), getattr(one_by_one, k), err_msg=k)
     alone = evolve_many(30.0, 10.0, c1[2], c2[2], 20.0)
     assert len(shared) == 4 and len(alone) == 1
     for k in FIELDS + ("t", "termination"):

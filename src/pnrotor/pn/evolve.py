@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..ode import EVENTS_SIG, RHS_SIG, by_address
-from ..ode.dop853 import OUT_FINAL, OUT_STEPS, _controller, _default_hook, _function_addresses, _integrate
+from ..ode.dop853 import OUT_FINAL, OUT_STEPS, _controller, _default_hook, _integrate
 from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
 from . import initial as _ini
@@ -200,7 +200,7 @@ def build_system(s, parts=None):
         y0 = np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0])   # [v, χ₁, χ₂, R, Φ]
     # they cannot raise (error_model='numpy'), so they may go to the integrator by address
     events = by_address(events, EVENTS_SIG)
-    _check_start(s, kmax, bvals, *at_v0, _sys.earlier_end(_function_addresses(events), y0, p))
+    _check_start(s, kmax, bvals, *at_v0, _sys.earlier_end(*events.addresses, y0, p))
     return System(by_address(rhs, RHS_SIG), events, p, y0, kmax, bvals)
 
 
@@ -224,8 +224,8 @@ def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
            else "dv/dt <= 0" if not n0 * d0 > 0.0
            else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS
            else "the orbital frequency no longer accelerates (d2(omega)/dt2 <= 0)" if not peak0 > 0.0 else None)
-    if why or ended:
-        v_end = _sys.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2)
+    if why or ended:   # the bound: the first end on inspiral_end's grid or on the start check's, whichever is lower
+        v_end = min(_sys.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2), ended or 1.0)
         why = f"{why} at v = {s.v0:.4g}" if why else \
             f"it ended at a lower v (v = {v_end:.4g}) and v = {s.v0:.4g} is beyond"
         raise ValueError(f"f_ref = {s.f_ref} Hz is past the end of the {s.approximant} inspiral: {why}; for these "

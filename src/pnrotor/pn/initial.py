@@ -31,21 +31,39 @@ def _real(x):
     return isinstance(x, numbers.Real) and not isinstance(x, _BOOLS)
 
 
+def _finite(x):
+    """Whether the real number x is finite as a float (an int beyond any float, 10**400, is not)."""
+    try:
+        return math.isfinite(x)
+    except OverflowError:
+        return False
+
+
 def _integer(x):
     """Whether x is an integer (Python's or numpy's), not a bool."""
     return isinstance(x, (int, np.integer)) and not isinstance(x, _BOOLS)
 
 
+def in_unit(x, unit, name, what):
+    """x itself, or an astropy Quantity's value in ``unit`` (an astropy unit name; None: no Quantity taken), else a
+    ValueError "`name` must be `what`" naming the Quantity's unit."""
+    u = sys.modules.get("astropy.units")   # a Quantity exists only if its module was imported
+    if u is None or not isinstance(x, u.Quantity):
+        return x
+    try:
+        if unit is None:
+            raise u.UnitsError
+        return x.to_value(getattr(u, unit))
+    except u.UnitsError:
+        given = x.unit.to_string() or "dimensionless"
+        raise ValueError(f"{name} must be {what}, got an astropy Quantity in {given}"
+                         + (f" (not convertible to {unit})" if unit else "")) from None
+
+
 def _positive(x, unit, name, what):
     """A float from a float (already in `unit`) or an astropy Quantity converted to `unit` (an astropy unit
     name); must be finite and > 0, else a ValueError "`name` must be a finite positive `what`"."""
-    u = sys.modules.get("astropy.units")   # a Quantity exists only if its module was imported
-    if u is not None and isinstance(x, u.Quantity):
-        try:
-            x = x.to_value(getattr(u, unit))
-        except u.UnitsError:
-            raise ValueError(f"{name} must be a finite positive {what}, got {x!r} (not convertible to {unit})") \
-                from None
+    x = in_unit(x, unit, name, f"a finite positive {what}")
     try:
         if isinstance(x, _BOOLS):
             raise TypeError
@@ -103,8 +121,8 @@ def _vec3(a, name):
         if isinstance(x, _BOOLS) or isinstance(y, _BOOLS) or isinstance(z, _BOOLS):
             raise TypeError
         x, y, z = float(x), float(y), float(z)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a 3-vector of numbers, got {a!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be a 3-vector of finite numbers, got {a!r}") from None
     if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
         raise ValueError(f"{name} must be finite, got {a!r}")
     return x, y, z

@@ -32,7 +32,6 @@ Newtonian time, :func:`~pnrotor.pn.evolve.half`); a single run that hit its own 
 
 import gc
 import math
-import sys
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -177,12 +176,12 @@ def _nearer_targets(events, p_run, v_target, direction, seg_t, seg_h, seg_c, iv,
 
 
 def _per_binary(x, n, name, shape=(), unit=None):
-    """x as float64 of shape (n,) + shape, from that shape or ``shape`` alone (one value for every binary), or a
-    ValueError naming the parameter (booleans, text and complex numbers refused, as ``evolve`` refuses them; an
-    astropy Quantity converted to ``unit``, and refused where the parameter has none)."""
+    """x as float64 of shape (n,) + shape, from that shape or ``shape`` or (1,) + shape (one value for every
+    binary), or a ValueError naming the parameter (booleans, text and complex numbers refused, as ``evolve``
+    refuses them; an astropy Quantity converted to ``unit``, and refused where the parameter has none)."""
     want = "(N,) or a scalar" if not shape else f"(N, {shape[0]}) or ({shape[0]},)"
     a = _numbers(x, name, f"{want} with N = {n} binaries", unit)
-    if a.shape not in (shape, (n,) + shape):
+    if a.shape not in (shape, (1,) + shape, (n,) + shape):
         raise ValueError(f"{name} must have shape {want} with N = {n} binaries, got {a.shape}")
     return np.ascontiguousarray(np.broadcast_to(a, (n,) + shape))
 
@@ -191,39 +190,31 @@ def _numbers(x, name, shape, unit=None):
     """x as a float64 array, or a ValueError naming it and the ``shape`` expected: booleans are refused, as
     ``evolve`` refuses them, and so are text, complex numbers and ragged sequences; an astropy Quantity is
     converted to ``unit`` (M_sun, Hz), or refused where there is none."""
-    u = sys.modules.get("astropy.units")   # a Quantity exists only if its module was imported
-    if u is not None and isinstance(x, u.Quantity):
-        if unit is None:
-            raise ValueError(f"{name} must be numbers, not an astropy Quantity ({x.unit})")
-        try:
-            x = x.to_value(getattr(u, unit))
-        except u.UnitsError:
-            raise ValueError(f"{name} must be numbers (in {unit}) or an astropy Quantity convertible to {unit}, "
-                             f"got {x.unit}") from None
+    x = _ini.in_unit(x, unit, name, "numbers" if unit is None else f"numbers (in {unit})")
     try:
         if _has_bool(x) or np.iscomplexobj(x):
             raise TypeError
         return np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name} must be numbers (real: not booleans, text or complex) of shape {shape}") from None
 
 
 def _population_size(scalars, rows, lists):
     """N, the number of binaries: the length of every (N,) per-binary value in ``scalars``, (N, 3) one in ``rows``
-    and (N, K) one in ``lists`` (the frequencies), which must agree; 1 if every value is shared.  A ValueError
-    names the values that disagree."""
+    and (N, K) one in ``lists`` (the frequencies), which must agree but where it is 1 (shared, as numpy
+    broadcasts); 1 if every value is shared.  A ValueError names the values that disagree."""
     sizes = {}
     for group, ndim in ((scalars, 1), (rows, 2), (lists, 2)):
         for name, x in group.items():
             shape = _shape(x)
             if shape != "ragged" and len(shape) == ndim:
                 sizes[name] = shape[0]
-    if len(set(sizes.values())) > 1:
-        raise ValueError("the per-binary inputs must all have the same length N (one per binary), got "
+    if len(set(sizes.values()) - {1}) > 1:
+        raise ValueError("the per-binary inputs must all have the same length N (one per binary) or 1, got "
                          + ", ".join(f"{name} {n}" for name, n in sizes.items()))
-    n = next(iter(sizes.values()), 1)
-    if n == 0:
-        raise ValueError(f"{next(iter(sizes))} has no binary: N must be at least 1")
+    n = max(sizes.values(), default=1)
+    if 0 in sizes.values():
+        raise ValueError(f"{min(sizes, key=sizes.get)} has no binary: N must be at least 1")
     return n
 
 
@@ -237,10 +228,11 @@ def _has_bool(x):
 
 
 def _shape(x):
-    """np.shape(x), or "ragged" for nested sequences of unequal lengths."""
+    """np.shape(x), or "ragged" for nested sequences of unequal lengths (or of what numpy cannot stack, such as
+    astropy Quantities with units)."""
     try:
         return np.shape(x)
-    except ValueError:
+    except (ValueError, TypeError):
         return "ragged"
 
 

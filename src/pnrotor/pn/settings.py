@@ -146,8 +146,8 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
     if rotor not in ROTORS:
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     mode, sval = parse_sampling(sampling)
-    if (not _ini._real(atol) or not _ini._real(rtol) or not (atol > 0.0 and math.isfinite(atol))
-            or not (rtol >= 0.0 and math.isfinite(rtol))):
+    if not (_ini._real(atol) and _ini._real(rtol) and _ini._finite(atol) and _ini._finite(rtol) and atol > 0.0
+            and rtol >= 0.0):
         raise ValueError(f"atol must be > 0 and rtol >= 0, both finite numbers; got atol = {atol!r}, rtol = {rtol!r}")
     if not (_ini._integer(max_steps) and 1 <= max_steps <= MAX_STEPS):
         raise ValueError(f"max_steps must be an integer from 1 to {MAX_STEPS}, got {max_steps!r}")
@@ -194,7 +194,7 @@ def _kappa(kappa, name):
     """A spin-induced quadrupole parameter κ: a finite number ≥ 0 (1 for black holes)."""
     try:
         value = math.nan if isinstance(kappa, _ini._BOOLS) else float(kappa)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         value = math.nan
     if not (math.isfinite(value) and value >= 0.0):
         raise ValueError(f"{name} must be a finite number >= 0 (1 for a black hole, ~2-20 for neutron stars), "
@@ -283,7 +283,7 @@ def _order(x, name, lo, hi):
     given = x
     try:
         x = math.nan if isinstance(x, _ini._BOOLS) else float(x)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         x = math.nan
     if not (lo <= x <= hi) or abs(2 * x - round(2 * x)) > 1e-12:
         raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {given!r}")
