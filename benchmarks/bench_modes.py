@@ -12,7 +12,8 @@ aligned, precessing), sampled at Δt = 1/4096 s from f_start to the end of the i
 
 Timings include the Python calls and freeing each call's own output, and pnrotor's set-ups of each binary (its
 caches of spin-independent parts and of mode terms, `pn.system._spin_independent_parts` and
-`waveform.amplitudes._real_terms`, are emptied before each call, as for a new binary: ~0.15 ms and 0.15–0.3 ms); medians over interleaved rounds
+`waveform.amplitudes._real_terms`, are emptied before each call, as for a new binary: ~0.07–0.12 ms and
+~0.07–0.10 ms); medians over interleaved rounds
 (LAL, ours, ours-default and the evolution alone alternate case by case), robust on a shared machine.  The
 last two columns are modes()' own cost per sample, (evolve + modes − evolve) / samples, in ns.
 
