@@ -70,6 +70,8 @@ import time
 
 import numpy as np
 
+from pnrotor.files import replaced_on_success
+
 DT = 1.0 / 4096
 ATOL_REF, ATOL_CHECK = 1e-15, 5e-16
 REFINE = 2
@@ -527,7 +529,7 @@ def main(argv=None):
                    cases={n: dict(inputs=list(CASES[n]), **{k: v for k, v in results[n].items()}) for n in args.cases},
                    lal_accuracy=summary, default_atol={f"{a:g}": v for a, v in tot.items()},
                    recommended_atol=good[0] if good else None, atols_tried=common)
-        with open(args.json, "w") as fh:
+        with replaced_on_success(args.json) as temporary, open(temporary, "w") as fh:
             json.dump(out, fh, indent=1, default=float)
         print(f"wrote {args.json}")
     if args.figure:
@@ -554,5 +556,6 @@ def figure(results, cases, path):
     axes[0][0].set_ylabel("frame error (rad)")
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    with replaced_on_success(path) as temporary:
+        fig.savefig(temporary, dpi=120)
     print(f"wrote {path}")

@@ -20,6 +20,8 @@ import sys
 import time
 import warnings
 
+from pnrotor.files import replaced_on_success
+
 FULL = {"t_end": 1e6, "atols": [10.0 ** -k for k in range(4, 15)]}
 QUICK = {"t_end": 1e5, "atols": [1e-4, 1e-8, 1e-12]}
 
@@ -281,7 +283,8 @@ def figures(outdir, rows, curves, t_end):
     ax.set_title(f"Rotor, DOP853: frame error δ(t) (eq:error_norm), T = {t_end:g}")
     ax.legend(fontsize="small", ncol=2)
     paths.append(outdir / "error_vs_time.png")
-    fig.savefig(paths[-1], dpi=110)
+    with replaced_on_success(paths[-1]) as temporary:
+        fig.savefig(temporary, dpi=110)
 
     fig = Figure(figsize=(15, 5), layout="constrained")
     axes = fig.subplots(1, 3, sharey=True)
@@ -307,5 +310,6 @@ def figures(outdir, rows, curves, t_end):
     fig.suptitle(f"Maximum frame error vs cost, T = {t_end:g} (solid DOP853, dashed Bulirsch–Stoer; "
                  "× runs that stopped before T)")
     paths.append(outdir / "max_error.png")
-    fig.savefig(paths[-1], dpi=110)
+    with replaced_on_success(paths[-1]) as temporary:
+        fig.savefig(temporary, dpi=110)
     return paths

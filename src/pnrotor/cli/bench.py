@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 from pnrotor.cli import DAMPING, UsageError, add_damping_option
+from pnrotor.files import replaced_on_success
 
 
 def add_parser(subparsers):
@@ -73,7 +74,7 @@ def run(args):
     load_s = time.perf_counter() - start
     rows, curves = study.sweep(t_end, sorted(atols, reverse=True), repeat, tuple(args.damping or DAMPING), not args.no_scipy)
     path = outdir / "bench.csv"
-    with open(path, "w", newline="") as f:
+    with replaced_on_success(path) as temporary, open(temporary, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=study.COLUMNS)
         writer.writeheader()
         writer.writerows(rows)

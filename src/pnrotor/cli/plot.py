@@ -18,6 +18,7 @@ starts quickly.
 from pathlib import Path
 
 from pnrotor.cli import UsageError
+from pnrotor.files import replaced_on_success
 
 MAX_POINTS = 50_000
 ZOOM = 2000
@@ -70,7 +71,8 @@ def run(args):
         _post_newtonian(figure, result)
     else:
         _frame_history(figure, result, binary)
-    figure.savefig(output, dpi=100)
+    with replaced_on_success(output) as temporary:
+        figure.savefig(temporary, dpi=100)
     print(f"wrote {output}")
     return 0
 
