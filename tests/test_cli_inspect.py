@@ -137,6 +137,27 @@ def test_plot_writes_a_png(files, which, capsys):
     assert_sensible_png(png, (850, 1200))
 
 
+def test_inspect_modes_summary(tmp_path, capsys):
+    """A modes group's summary (it said "no summary for this kind of run"): the modes and their units, the span,
+    and the four largest peak amplitudes, each as computed here from the modes themselves."""
+    import pnrotor
+    run = pnrotor.evolve(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 100.0, sampling=1 / 4096)
+    h = pnrotor.modes(run, ell_max=3, amplitude_order=1.5, distance=250.0)
+    with hdf5.batch(tmp_path / "w.h5") as groups:
+        groups.add("run", run)
+        groups.add("modes", h)
+    lines = inspect_output(capsys, tmp_path / "w.h5", "--group", "modes").splitlines()
+    summary = lines[lines.index("summary") + 1:]
+    peaks = {mode: np.abs(h.mode(*mode)).max() for mode in h.ell_m}
+    top = sorted(peaks, key=lambda mode: -peaks[mode])[:4]
+    assert summary == [
+        "  12 modes, l = 2 ... 3, amplitude order 1.5 PN, inertial frame",
+        "  units: strain at 250 Mpc",
+        f"  duration {run.t[-1] - run.t[0]:.6g} M = {run.t_seconds[-1] - run.t_seconds[0]:.6g} s",
+        "  largest max |h_lm|: " + ", ".join(f"({ell}, {m}) {peaks[(ell, m)]:.4g}" for ell, m in top)]
+    assert top[0] == (2, 2)
+
+
 def test_plot_draws_modes_and_polarizations(tmp_path, capsys):
     """The modes group of `pnrotor evolve --modes`: |h_lm| and h+, hx from a chosen direction."""
     pytest.importorskip("matplotlib")

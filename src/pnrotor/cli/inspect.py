@@ -3,9 +3,10 @@
 For one run: its kind, schema and pnrotor version, creation time, the sample count and time range, every
 array (shape, dtype, units), every scalar and every dict field (inputs, statistics) with exact values,
 then a short summary — for post-Newtonian runs the duration in M and s, the number of orbits ΔΦ/2π,
-the first and final v and the termination; for frame histories the formulation, method, tolerances,
-status and integrator work; for a population file (`PopulationTable`) the count of each termination. For a
-batch file: its runs, or one run with ``--group``.
+the first and final v and the termination; for waveform modes which modes, their units, the span and the
+largest amplitudes; for frame histories the formulation, method, tolerances, status and integrator work; for
+a population file (`PopulationTable`) the count of each termination.  For a batch file: its runs, or one run
+with ``--group``.
 
 numpy and h5py are imported only when the command runs, so that the CLI starts quickly.
 """
@@ -105,6 +106,8 @@ def summary(result):
             f"v from {v[0]:.6g} to {v[-1]:.6g} (final)",
             f"termination: {getattr(result, 'termination', 'not recorded')}",
         ]
+    if hasattr(result, "ell_m"):   # waveform modes
+        return _modes_summary(result)
     if hasattr(result, "formulation"):
         r = result
         return [
@@ -114,6 +117,24 @@ def summary(result):
             f"{r.n_resets} generator resets, {r.wall_time:.3g} s wall time",
         ]
     return ["no summary for this kind of run"]
+
+
+def _modes_summary(h):
+    """What a `Modes` holds: which modes and in what units, the span, and the largest amplitudes."""
+    import numpy as np
+
+    order = h.inputs.get("amplitude_order") if isinstance(h.inputs, dict) else None
+    lines = [f"{len(h.ell_m)} modes, l = 2 ... {h.ell_max}"
+             + ("" if order is None else f", amplitude order {order:g} PN") + f", {h.frame} frame",
+             f"units: strain at {h.distance_Mpc:g} Mpc" if h.distance_Mpc is not None else "units: r h / M"]
+    if h.t.size == 0:
+        return lines + ["no samples"]
+    lines.append(f"duration {h.t[-1] - h.t[0]:.6g} M = {h.t_seconds[-1] - h.t_seconds[0]:.6g} s")
+    peaks = np.abs(h.data).max(axis=1)
+    ranked = np.argsort(-peaks, kind="stable")[:4]
+    lines.append("largest max |h_lm|: " + ", ".join(f"({h.ell_m[k][0]}, {h.ell_m[k][1]}) {peaks[k]:.4g}"
+                                                    for k in ranked))
+    return lines
 
 
 def _items(values, indent="  "):
