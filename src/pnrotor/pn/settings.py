@@ -192,10 +192,7 @@ def _frame_rotor(ell_n):
 
 def _kappa(kappa, name):
     """A spin-induced quadrupole parameter κ: a finite number ≥ 0 (1 for black holes)."""
-    try:
-        value = math.nan if isinstance(kappa, _ini._BOOLS) else float(kappa)
-    except (TypeError, ValueError, OverflowError):
-        value = math.nan
+    value = _float_or_nan(kappa)
     if not (math.isfinite(value) and value >= 0.0):
         raise ValueError(f"{name} must be a finite number >= 0 (1 for a black hole, ~2-20 for neutron stars), "
                          f"got {kappa!r}")
@@ -280,14 +277,20 @@ def _order(x, name, lo, hi):
     """A PN order: a multiple of 0.5 in [lo, hi]."""
     if x is None:
         raise ValueError(f"{name} is required")
-    given = x
+    value = _float_or_nan(x)
+    if not (lo <= value <= hi) or abs(2 * value - round(2 * value)) > 1e-12:
+        raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {x!r}")
+    return value
+
+
+def _float_or_nan(x):
+    """float(x), or NaN for what is not a real number: a bool, text, None, an int beyond any float (10**400)."""
+    if isinstance(x, _ini._BOOLS):
+        return math.nan
     try:
-        x = math.nan if isinstance(x, _ini._BOOLS) else float(x)
+        return float(x)
     except (TypeError, ValueError, OverflowError):
-        x = math.nan
-    if not (lo <= x <= hi) or abs(2 * x - round(2 * x)) > 1e-12:
-        raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {given!r}")
-    return x
+        return math.nan
 
 
 MAX_PER_ORBIT = 2 ** 53
