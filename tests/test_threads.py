@@ -1,0 +1,100 @@
+"""pnrotor.threads: the parts of a split call, running them, and the modes kernel computed in parts."""
+
+import multiprocessing
+import threading
+import time
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from pnrotor import threads
+from pnrotor.waveform import amplitudes
+
+
+@settings(max_examples=300, deadline=None)
+@given(n=st.integers(0, 100_000), min_part=st.integers(1, 5_000), align=st.sampled_from([1, 7, 256]),
+       count=st.integers(1, 8))
+def test_parts_cover_the_range_in_order(n, min_part, align, count):
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(threads, "thread_count", lambda: count)
+        ranges = threads.parts(n, min_part, align)
+    assert ranges[0][0] == 0 and ranges[-1][1] == n
+    assert all(a[1] == b[0] for a, b in zip(ranges, ranges[1:]))
+    assert 1 <= len(ranges) <= count
+    if len(ranges) > 1:
+        assert all(hi - lo >= max(align, min_part - align) for lo, hi in ranges)
+        assert all(lo % align == 0 for lo, _ in ranges)
+    else:
+        assert n < 2 * max(min_part, align) or count == 1
+
+
+def test_run_waits_for_every_part_when_one_raises(monkeypatch):
+    done = []
+
+    def kernel(lo, hi):
+        if lo == 0:
+            raise ValueError("first part")
+        time.sleep(0.2)
+        done.append((lo, hi))
+
+    with pytest.raises(ValueError, match="first part"):
+        threads.run(kernel, [(0, 1), (1, 2), (2, 3)])
+    assert sorted(done) == [(1, 2), (2, 3)]   # the other parts had finished when the caller saw the error
+
+
+def test_run_raises_a_workers_error():
+    seen = []
+
+    def kernel(lo, hi):
+        if lo:
+            raise RuntimeError(f"part {lo}")
+        seen.append(threading.current_thread() is threading.main_thread())
+
+    with pytest.raises(RuntimeError, match="part 5"):
+        threads.run(kernel, [(0, 5), (5, 9)])
+    assert seen == [True]   # the first part on the calling thread
+
+
+def _precessing_samples(n):
+    rng = np.random.default_rng(7)
+    v = np.linspace(0.2, 0.4, n)
+    chi1, chi2 = 0.5 * rng.normal(size=(n, 3)), 0.4 * rng.normal(size=(n, 3))
+    R = rng.normal(size=(n, 4))
+    return v, chi1, chi2, R
+
+
+@pytest.mark.parametrize("frame", ["rotors", "z", "coorbital"])
+@pytest.mark.parametrize("n", [700, 5_001])
+def test_modes_in_parts_bitwise_equal_one_part(monkeypatch, frame, n):
+    v, chi1, chi2, R = _precessing_samples(n)
+    if frame == "z":
+        chi1 = chi2 = None
+        R[:, 1:3] = 0.0
+
+    def modes(count):
+        monkeypatch.setattr(threads, "thread_count", lambda: count)
+        return amplitudes.modes_in_frame(v, chi1, chi2, 30.0, 10.0, 5, 7, R=R, frame=frame)
+
+    monkeypatch.setattr(amplitudes, "MIN_PART", 1)
+    one, three = modes(1), modes(3)
+    assert threads.parts(n, 1, 256) != [(0, n)]    # really in parts
+    assert np.array_equal(one, three) and np.all(np.isfinite(one))
+
+
+def _child_modes(queue):
+    v, chi1, chi2, R = _precessing_samples(5_000)
+    queue.put(amplitudes.modes_in_frame(v, chi1, chi2, 30.0, 10.0, 4, 3, R=R, frame="rotors")[3, -1])
+
+
+def test_a_forked_child_splits_with_its_own_pool(monkeypatch):
+    monkeypatch.setattr(threads, "thread_count", lambda: 2)
+    v, chi1, chi2, R = _precessing_samples(5_000)
+    expected = amplitudes.modes_in_frame(v, chi1, chi2, 30.0, 10.0, 4, 3, R=R, frame="rotors")[3, -1]  # pool made
+    queue = multiprocessing.get_context("fork").Queue()
+    child = multiprocessing.get_context("fork").Process(target=_child_modes, args=(queue,))
+    child.start()
+    child.join(60)
+    assert not child.is_alive(), "the forked child hung (the parent's pool threads do not exist in it)"
+    assert queue.get(timeout=5) == expected
