@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pnrotor import threads
-from pnrotor.waveform import amplitudes
+from pnrotor.waveform import amplitudes, wigner
 
 
 @settings(max_examples=300, deadline=None)
@@ -77,10 +77,25 @@ def test_modes_in_parts_bitwise_equal_one_part(monkeypatch, frame, n):
         monkeypatch.setattr(threads, "thread_count", lambda: count)
         return amplitudes.modes_in_frame(v, chi1, chi2, 30.0, 10.0, 5, 7, R=R, frame=frame)
 
-    monkeypatch.setattr(amplitudes, "MIN_PART", 1)
+    monkeypatch.setattr(wigner, "MIN_PART", 1)
     one, three = modes(1), modes(3)
     assert threads.parts(n, 1, 256) != [(0, n)]    # really in parts
     assert np.array_equal(one, three) and np.all(np.isfinite(one))
+
+
+@pytest.mark.parametrize("n", [700, 5_001])
+def test_rotate_modes_in_parts_bitwise_equal_one_part(monkeypatch, n):
+    rng = np.random.default_rng(3)
+    H = rng.normal(size=(wigner.n_modes(6), n)) + 1j * rng.normal(size=(wigner.n_modes(6), n))
+    R = rng.normal(size=(n, 4))
+    monkeypatch.setattr(wigner, "MIN_PART", 1)
+    monkeypatch.setattr(threads, "thread_count", lambda: 1)
+    one = wigner.rotate_modes(H, R, 6)
+    monkeypatch.setattr(threads, "thread_count", lambda: 3)
+    assert np.array_equal(one, wigner.rotate_modes(H, R, 6))
+    # and the rotation itself: h = D(R) H per sample, D from wigner_D (one kernel call per sample's columns)
+    D = wigner.wigner_D(R[:5], 6)
+    assert np.allclose(one[:, :5], np.einsum("sjk,ks->js", D, H[:, :5]), rtol=0, atol=1e-13)
 
 
 def _child_modes(queue):
@@ -96,5 +111,7 @@ def test_a_forked_child_splits_with_its_own_pool(monkeypatch):
     child = multiprocessing.get_context("fork").Process(target=_child_modes, args=(queue,))
     child.start()
     child.join(60)
-    assert not child.is_alive(), "the forked child hung (the parent's pool threads do not exist in it)"
+    hung = child.is_alive()
+    child.kill()
+    assert not hung, "the forked child hung (the parent's pool threads do not exist in it)"
     assert queue.get(timeout=5) == expected

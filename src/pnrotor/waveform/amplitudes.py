@@ -23,14 +23,13 @@ Measured (benchmarks/bench_modes.py, shared two-core machine), modes() per sampl
 for ℓ ≤ 4 at 1.5PN and ~340–460 ns for ℓ ≤ 8 at 3.5PN (~130–160 and ~430–500 before the rotors were copied to
 rows and the sums folded into :func:`_mirror`; ~500–600 with d's elements formed per sample, ~400 and ~1,500 ns
 for amplitudes and rotation as two passes over an H array); nonprecessing runs ~60–120 and ~190–240 ns, against
-~140–280 and ~500–700 ns.  Runs of at least 2 × :data:`MIN_PART` samples are computed in parts at the same time
-on the machine's threads (:mod:`pnrotor.threads`; the kernel is ``nogil`` and takes the range of samples, each
-part's blocks starting at a multiple of the block; bitwise the same output): the 30+10 M☉ precessing run at 1/4096
-s (9,926 samples) ℓ ≤ 4 at 1.5PN 1.67 → 0.98 ms, ℓ ≤ 8 at 3.5PN 4.75 → 3.3 ms, equal masses precessing (25,220)
-4.13 → 2.29 ms, on two cores (tight loops).  The kernel is one compiled function for every frame (~6.5–7 s to
-compile on a cold cache).  It holds the block
-functions of :mod:`~pnrotor.waveform.wigner` and :func:`pnrotor.quaternion.qrotate_into` (numba caches it per
-source file): after editing those, remove this module's ``__pycache__/amplitudes.*.nb*``.
+~140–280 and ~500–700 ns.  Runs of at least 2 × :data:`pnrotor.waveform.wigner.MIN_PART` samples are computed
+in parts at the same time on the machine's threads (:mod:`pnrotor.threads`; the kernel is ``nogil`` and takes the
+range of samples, each part's blocks starting at a multiple of the block; bitwise the same output): the 30+10 M☉
+precessing run at 1/4096 s (9,926 samples) ℓ ≤ 4 at 1.5PN 1.67 → 0.98 ms, ℓ ≤ 8 at 3.5PN 4.75 → 3.3 ms, equal
+masses precessing (25,220) 4.13 → 2.29 ms, on two cores (tight loops).  The kernel is one compiled function for
+every frame (~6.5–7 s to compile on a cold cache).  It holds the block functions of :mod:`~pnrotor.waveform.wigner`
+and :func:`pnrotor.quaternion.qrotate_into` (numba caches it per source file): after editing those, remove this module's ``__pycache__/amplitudes.*.nb*``.
 """
 
 from functools import lru_cache
@@ -40,7 +39,7 @@ from numba import njit
 
 from pnrotor import threads
 from pnrotor.quaternion import qrotate_into
-from pnrotor.waveform import nonspinning, spin
+from pnrotor.waveform import nonspinning, spin, wigner
 from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.waveform.wigner import (_CHUNK, _phase_powers, _rotate_ell, _rotation_scratch, _rotor_block,
                                      _rotor_rows, _store, rotation_plan)
@@ -281,11 +280,6 @@ def _sum(v, chi1, chi2, R, spins, frame, h0, scale, logs, X1, X2, kappa1, kappa2
                 _store(o_re, o_im, r, out_re, out_im, abs(r - ell), r < ell, scale, out, first_row + r, i0, nb)
 
 
-MIN_PART = 1024
-"""Samples per thread at least (:mod:`pnrotor.threads`): measured, ℓ ≤ 4 at 1.5PN, one part against two, 212 and
-219 µs for 1,024 samples, 351 and 286 µs for 2,048."""
-
-
 def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None, frame="coorbital",
                    scale=1.0):
     """The modes (n_modes, N) complex, C-contiguous, rows in :func:`~pnrotor.waveform.layout.mode_index` order,
@@ -318,7 +312,7 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
     out = np.empty((n_modes(ell_max), v.size), dtype=np.complex128)
     args = (v, chi1, chi2, R, spins, _FRAME_CODES[frame], H0 * nu, float(scale), bool(np.any(q == _Q_LOG)), X1, X2,
             float(kappa1), float(kappa2), int(ell_max), ell_start, target, k, q, c, *plan, out.view(np.float64))
-    threads.run(lambda lo, hi: _sum(*args, lo, hi), threads.parts(v.size, MIN_PART, _CHUNK))
+    threads.run(lambda lo, hi: _sum(*args, lo, hi), threads.parts(v.size, wigner.MIN_PART, _CHUNK))
     return out
 
 
