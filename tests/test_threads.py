@@ -115,3 +115,27 @@ def test_a_forked_child_splits_with_its_own_pool(monkeypatch):
     child.kill()
     assert not hung, "the forked child hung (the parent's pool threads do not exist in it)"
     assert queue.get(timeout=5) == expected
+
+
+def test_limit_caps_the_threads_and_checks_its_argument():
+    before = threads.thread_count()
+    try:
+        threads.limit(1)
+        assert threads.thread_count() == 1 and threads.parts(10**6, 1) == [(0, 10**6)]
+        threads.limit(10**6)
+        assert threads.thread_count() == before
+    finally:
+        threads.limit(None)
+    assert threads.thread_count() == before
+    for bad in (0, -1, 1.5, True, "2"):
+        with pytest.raises(ValueError, match="count must be None or an integer >= 1"):
+            threads.limit(bad)
+
+
+def test_batch_workers_take_one_thread_each():
+    from concurrent.futures import ProcessPoolExecutor
+
+    from pnrotor.batch.backends import _preload
+
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("forkserver"), initializer=_preload) as pool:
+        assert pool.submit(threads.thread_count).result(timeout=120) == 1

@@ -10,12 +10,14 @@ pages (benchmarks/bench_modes.py), which the parts share too.  (The uniform samp
 precessing run at 1/4096 s 0.74 ms whole, 0.82 ms in two parts; 238,041 samples of a BNS 20.1 and 22.1 ms.)
 
 Threads: numba's (``NUMBA_NUM_THREADS``, or ``numba.set_num_threads`` once numba's parallel layer runs, e.g.
-after :func:`pnrotor.evolve_many`); 1 computes everything on the calling thread.  A part has at least the
+after :func:`pnrotor.evolve_many`), at most :func:`limit`'s (the worker processes of a batch take one each: they
+already fill the cores); 1 computes everything on the calling thread.  A part has at least the
 ``min_part`` samples its caller gives: handing parts to the pool and back costs ~100 µs here (modes of 1,024
 samples, ℓ ≤ 4: 212 µs in one part, 219 in two; 2,048: 351 and 286; 4,096: 699 and 462).  The pool is made on the
 first call that splits and kept (one per process: a forked child makes its own).
 """
 
+import numbers
 import os
 from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
@@ -23,15 +25,26 @@ from functools import lru_cache
 import numba
 from numba.np.ufunc import parallel as _numba_parallel
 
-__all__ = ["parts", "run", "thread_count"]
+__all__ = ["parts", "run", "thread_count", "limit"]
+
+_limit = None
+"""At most this many threads per call in this process (None: numba's count)."""
+
+
+def limit(count):
+    """Use at most ``count`` (≥ 1) threads per call in this process from now on; None: numba's count again."""
+    global _limit
+    if count is not None and (isinstance(count, bool) or not isinstance(count, numbers.Integral) or count < 1):
+        raise ValueError(f"count must be None or an integer >= 1; got {count!r}")
+    _limit = count
 
 
 def thread_count():
     """Threads for one call: numba's current count once its parallel layer is running (launching it costs ~50 ms),
-    else ``numba.config.NUMBA_NUM_THREADS``."""
-    if getattr(_numba_parallel, "_is_initialized", False):
-        return numba.get_num_threads()
-    return numba.config.NUMBA_NUM_THREADS
+    else ``numba.config.NUMBA_NUM_THREADS``; at most :func:`limit`'s."""
+    count = numba.get_num_threads() if getattr(_numba_parallel, "_is_initialized", False) else \
+        numba.config.NUMBA_NUM_THREADS
+    return count if _limit is None else min(count, _limit)
 
 
 def parts(n, min_part, align=1):

@@ -112,6 +112,9 @@ def _preload():
     _ignore_interrupts()
     _die_with_parent()
     import pnrotor.pn.evolve  # noqa: F401 - numba's kernels, loaded once per worker
+    from pnrotor import threads
+
+    threads.limit(1)   # the workers fill the cores: a run's modes are not split over threads in a worker
 
 
 def _die_with_parent():
