@@ -1,9 +1,10 @@
 """One large kernel call spread over the machine's cores.
 
-A kernel that computes every sample on its own — the waveform modes of a run,
-:func:`pnrotor.waveform.amplitudes.modes_in_frame` — has its range of samples cut into parts (:func:`parts`), the
-first computed on the calling thread and the others at the same time on the threads of a pool (:func:`run`); the
-kernel is a numba ``nogil`` function, so the parts run in parallel.  Every sample is computed by the same code
+A kernel that computes every sample on its own — the waveform modes of a run
+(:func:`pnrotor.waveform.amplitudes.modes_in_frame`) and their rotation to another frame
+(:func:`pnrotor.waveform.wigner.rotate_modes`) — has its range of samples cut into parts (:func:`parts`), the first
+computed on the calling thread and the others at the same time on the threads of a pool (:func:`run`); the kernels
+are numba ``nogil`` functions, so the parts run in parallel.  Every sample is computed by the same code
 either way: the output is bitwise the same (tested).  Much of a large output's cost is the first touch of its fresh
 pages (benchmarks/bench_modes.py), which the parts share too.  (The uniform samples of a run,
 :func:`pnrotor.pn.sampling.sample`, were tried the same way and gained nothing measurable: evolve of the 30+10 M☉
@@ -11,15 +12,14 @@ precessing run at 1/4096 s 0.74 ms whole, 0.82 ms in two parts; 238,041 samples 
 
 Threads: numba's (``NUMBA_NUM_THREADS``, or ``numba.set_num_threads`` once numba's parallel layer runs, e.g.
 after :func:`pnrotor.evolve_many`), at most :func:`limit`'s (the worker processes of a batch take one each: they
-already fill the cores); 1 computes everything on the calling thread.  A part has at least the
-``min_part`` samples its caller gives: handing parts to the pool and back costs ~100 µs here (modes of 1,024
+already fill the cores); 1 computes everything on the calling thread.  A part has about the ``min_part`` samples
+its caller gives at least (:func:`parts`): handing parts to the pool and back costs ~100 µs here (modes of 1,024
 samples, ℓ ≤ 4: 212 µs in one part, 219 in two; 2,048: 351 and 286; 4,096: 699 and 462).  The pool is made on the
 first call that splits and kept (one per process: a forked child makes its own).
 """
 
 import numbers
 import os
-from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
 
 import numba
@@ -78,4 +78,6 @@ def run(kernel, ranges):
 @lru_cache(maxsize=None)
 def _pool(pid, workers):
     """The pool of this process (``pid``: a forked child does not inherit the parent's threads)."""
+    from concurrent.futures import ThreadPoolExecutor   # 13 ms to import: only for a call that splits
+
     return ThreadPoolExecutor(workers, thread_name_prefix="pnrotor")
