@@ -1,6 +1,11 @@
 """pnrotor.threads: the parts of a split call, running them, and the modes kernel computed in parts."""
 
 import multiprocessing
+import os
+import signal
+import subprocess
+import sys
+import textwrap
 import threading
 import time
 
@@ -139,3 +144,62 @@ def test_batch_workers_take_one_thread_each():
 
     with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("forkserver"), initializer=_preload) as pool:
         assert pool.submit(threads.thread_count).result(timeout=120) == 1
+
+
+def test_a_ctrl_c_while_waiting_is_raised_after_every_part():
+    done = []
+
+    def kernel(lo, hi):
+        if lo:
+            time.sleep(0.5)
+            done.append(lo)
+        else:   # Ctrl-C arrives while this thread waits for the other part
+            threading.Timer(0.1, os.kill, (os.getpid(), signal.SIGINT)).start()
+
+    with pytest.raises(KeyboardInterrupt):
+        threads.run(kernel, [(0, 1), (1, 2)])
+    assert done == [1]
+
+
+def test_workers_are_reused_across_part_counts(monkeypatch):
+    monkeypatch.setattr(threads, "thread_count", lambda: 4)
+    for n in (2, 3, 4, 3, 2, 4):
+        threads.run(lambda lo, hi: None, threads.parts(n, 1))
+    assert len(threads._workers) <= 3 and threads.idle_workers() == len(threads._workers)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="fork is the start method on Linux only")
+def test_batches_still_fork_beside_idle_workers(monkeypatch):
+    from pnrotor.batch.backends import start_method
+
+    monkeypatch.setattr(threads, "thread_count", lambda: 2)
+    threads.run(lambda lo, hi: None, threads.parts(2, 1))
+    assert threads.idle_workers() >= 1
+    others = [t for t in threading.enumerate() if t is not threading.current_thread()
+              and not t.name.startswith("pnrotor-")]
+    assert start_method() == ("forkserver" if others else "fork")
+
+
+@pytest.mark.parametrize("where", ["atexit", "thread"])
+def test_split_calls_work_at_interpreter_shutdown(where):
+    """Modes of 5,000 samples from an atexit handler or a thread still running when the main thread ends (a
+    concurrent.futures pool refuses work then)."""
+    code = textwrap.dedent(f"""
+        import atexit, threading
+        import numpy as np
+        from pnrotor.waveform import amplitudes
+
+        def modes():
+            v = np.linspace(0.2, 0.4, 5000)
+            h = amplitudes.modes_in_frame(v, None, None, 30.0, 10.0, 4, 3)
+            print("ok", h.shape, np.isfinite(h).all(), flush=True)
+
+        if "{where}" == "atexit":
+            atexit.register(modes)
+        else:
+            threading.Thread(target=lambda: (threading.main_thread().join(), modes())).start()
+    """)
+    env = dict(os.environ, NUMBA_NUM_THREADS="2")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)
+    assert done.returncode == 0, done.stderr
+    assert "ok (21, 5000) True" in done.stdout
