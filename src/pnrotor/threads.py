@@ -13,9 +13,10 @@ precessing run at 1/4096 s 0.74 ms whole, 0.82 ms in two parts; 238,041 samples 
 Threads: numba's (``NUMBA_NUM_THREADS``, or what ``numba.set_num_threads`` set for the calling thread once numba's
 parallel layer runs, e.g. after :func:`pnrotor.evolve_many`), at most :func:`limit`'s (the worker processes of a
 batch take one each: they already fill the cores); 1 computes everything on the calling thread.  A part has about
-the ``min_part`` samples its caller gives at least (:func:`parts`): handing parts to the workers and back costs
-~100 µs here (modes of 1,024 samples, ℓ ≤ 4: 212 µs in one part, 219 in two; 2,048: 351 and 286; 4,096: 699 and
-462).  The workers are daemon threads of this process, started by the first call that needs them and kept, idle,
+the ``min_part`` samples its caller gives at least (:func:`parts`): handing a part to a worker and back costs ~40
+µs here (median of a call in two parts with nothing to compute; 34–51 µs from the 10th to the 90th percentile), and
+the parts slow each other where they share memory bandwidth (modes of 1,024 samples, ℓ ≤ 4: 214 µs in one part, 226
+in two; 2,048: 378 and 311; 4,096: 687 and 447).  The workers are daemon threads of this process, started by the first call that needs them and kept, idle,
 for the next ones (a forked child starts its own; a batch still forks its workers beside idle ones,
 :func:`idle_workers`).
 """

@@ -29,7 +29,8 @@ range of samples, each part's blocks starting at a multiple of the block; bitwis
 precessing run at 1/4096 s (9,926 samples) ℓ ≤ 4 at 1.5PN 1.67 → 0.98 ms, ℓ ≤ 8 at 3.5PN 4.75 → 3.3 ms, equal
 masses precessing (25,220) 4.13 → 2.29 ms, on two cores (tight loops).  The kernel is one compiled function for
 every frame (~6.5–7 s to compile on a cold cache).  It holds the block functions of :mod:`~pnrotor.waveform.wigner`
-and :func:`pnrotor.quaternion.qrotate_into` (numba caches it per source file): after editing those, remove this module's ``__pycache__/amplitudes.*.nb*``.
+and :func:`pnrotor.quaternion.qrotate_into` (numba caches it per source file): after editing those, remove this
+module's ``__pycache__/amplitudes.*.nb*``.
 """
 
 from functools import lru_cache

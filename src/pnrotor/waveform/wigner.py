@@ -136,8 +136,9 @@ _CHUNK = 256
 
 MIN_PART = 1024
 """Samples per thread at least for :func:`_rotate` and :func:`pnrotor.waveform.amplitudes._sum`, which compute runs
-of 2 MIN_PART samples or more in parts on the machine's threads (:mod:`pnrotor.threads`; measured, modes ℓ ≤ 4 at
-1.5PN, one part against two: 212 and 219 µs for 1,024 samples, 351 and 286 µs for 2,048)."""
+of 2 MIN_PART samples or more in parts on the machine's threads (:mod:`pnrotor.threads`; measured, modes of a
+precessing run, one part against two: ℓ ≤ 4 at 1.5PN 214 and 226 µs for 1,024 samples, 378 and 311 µs for 2,048;
+ℓ ≤ 8 at 3.5PN 578 and 388 µs for 1,024)."""
 
 
 # The kernels' innermost loops, one per function over the samples s of a block, on the block arrays and row
@@ -323,6 +324,7 @@ def rotate_modes(H, R, ell_max):
                          f"R (N, 4); got H {H.shape}, R {R.shape}")
     H = np.ascontiguousarray(H, dtype=np.complex128)
     h = np.empty_like(H)
-    args = (H, R, int(ell_max), *rotation_plan(np.ones((ell_max + 1, ell_max + 1), dtype=np.bool_)), h.view(np.float64))
+    every_column = np.ones((ell_max + 1, ell_max + 1), dtype=np.bool_)
+    args = (H, R, int(ell_max), *rotation_plan(every_column), h.view(np.float64))
     threads.run(lambda lo, hi: _rotate(*args, lo, hi), threads.parts(R.shape[0], MIN_PART, _CHUNK))
     return h
