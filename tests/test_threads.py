@@ -35,18 +35,25 @@ def test_parts_cover_the_range_in_order(n, min_part, align, count):
         assert n < 2 * max(min_part, align) or count == 1
 
 
-def test_run_waits_for_every_part_when_one_raises(monkeypatch):
+def test_an_error_here_waits_for_the_running_parts_and_drops_the_others():
     done = []
+
+    started = threading.Event()
 
     def kernel(lo, hi):
         if lo == 0:
+            started.wait(5)   # a worker has the second part
             raise ValueError("first part")
+        started.set()
         time.sleep(0.2)
         done.append((lo, hi))
 
     with pytest.raises(ValueError, match="first part"):
         threads.run(kernel, [(0, 1), (1, 2), (2, 3)])
-    assert sorted(done) == [(1, 2), (2, 3)]   # the other parts had finished when the caller saw the error
+    at_return = sorted(done)
+    time.sleep(0.5)
+    assert (1, 2) in at_return and sorted(done) == at_return   # the part running finished first; none ran after
+    assert threads._busy == 0
 
 
 def test_run_raises_a_workers_error():
@@ -165,19 +172,93 @@ def test_workers_are_reused_across_part_counts(monkeypatch):
     monkeypatch.setattr(threads, "thread_count", lambda: 4)
     for n in (2, 3, 4, 3, 2, 4):
         threads.run(lambda lo, hi: None, threads.parts(n, 1))
-    assert len(threads._workers) <= 3 and threads.idle_workers() == len(threads._workers)
+    assert len(threads._workers) <= 3 and threads._busy == 0
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="fork is the start method on Linux only")
-def test_batches_still_fork_beside_idle_workers(monkeypatch):
+def test_batches_stop_idle_workers_and_fork(monkeypatch):
     from pnrotor.batch.backends import start_method
 
     monkeypatch.setattr(threads, "thread_count", lambda: 2)
     threads.run(lambda lo, hi: None, threads.parts(2, 1))
-    assert threads.idle_workers() >= 1
+    assert any(t.name.startswith("pnrotor-") for t in threading.enumerate())
     others = [t for t in threading.enumerate() if t is not threading.current_thread()
               and not t.name.startswith("pnrotor-")]
     assert start_method() == ("forkserver" if others else "fork")
+    assert not any(t.name.startswith("pnrotor-") for t in threading.enumerate())
+    threads.run(lambda lo, hi: None, threads.parts(2, 1))   # and they start again
+    assert threads._workers and threads._busy == 0
+
+
+def test_concurrent_and_nested_calls_do_not_wait_for_a_free_worker(monkeypatch):
+    monkeypatch.setattr(threads, "thread_count", lambda: 2)
+    assert threads.stop_idle_workers()   # from none: each call starts only the workers it lacks
+    seen = []
+
+    def slow(lo, hi):
+        time.sleep(0.2)
+        seen.append(lo)
+
+    callers = [threading.Thread(target=threads.run, args=(slow, [(0, 1), (1, 2)])) for _ in range(4)]
+    t0 = time.perf_counter()
+    for c in callers:
+        c.start()
+    for c in callers:
+        c.join()
+    assert len(seen) == 8 and time.perf_counter() - t0 < 0.7   # with one worker for four callers: 0.8 s
+
+    def outer(lo, hi):   # a split call from inside a part (a worker's or the caller's)
+        threads.run(lambda a, b: seen.append((a, b)), [(0, 1), (1, 2)])
+
+    done = threading.Thread(target=threads.run, args=(outer, [(0, 1), (1, 2)]), daemon=True)
+    done.start()
+    done.join(10)
+    assert not done.is_alive()
+
+
+def test_a_workers_error_leaves_no_reference_cycle_holding_the_arrays(monkeypatch):
+    import gc
+    import weakref
+
+    class Big:
+        pass
+
+    def call():
+        big = Big()
+
+        def kernel(lo, hi):
+            if lo:
+                raise ValueError(str(type(big)))
+
+        with pytest.raises(ValueError):
+            threads.run(kernel, [(0, 1), (1, 2)])
+        return weakref.ref(big)
+
+    gc.disable()
+    try:
+        assert call()() is None
+    finally:
+        gc.enable()
+
+
+def test_a_split_call_during_finalization_runs_here():
+    code = textwrap.dedent("""
+        import sys
+        from pnrotor import threads
+        threads.run(lambda lo, hi: None, [(0, 1), (1, 2)])   # a worker exists
+
+        class Late:
+            def __del__(self):
+                out = []
+                threads.run(lambda lo, hi: out.append((lo, hi)), [(0, 1), (1, 2)])
+                print("finalizing", sys.is_finalizing(), out, flush=True)
+
+        keep = Late()
+        keep.self = keep   # a cycle: collected at finalization
+    """)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert "[(0, 2)]" in done.stdout or "[(0, 1), (1, 2)]" in done.stdout, done.stdout
 
 
 @pytest.mark.parametrize("where", ["atexit", "thread"])
@@ -203,3 +284,41 @@ def test_split_calls_work_at_interpreter_shutdown(where):
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)
     assert done.returncode == 0, done.stderr
     assert "ok (21, 5000) True" in done.stdout
+
+
+def test_ctrl_c_at_any_moment_leaves_no_part_running_and_the_counts_right():
+    """Real SIGINTs at random moments around 400 three-part calls (a review's stress test): after each call no part
+    writes any more, the count of parts out comes back to 0, nothing hangs."""
+    code = textwrap.dedent("""
+        import os, random, signal, time
+        from pnrotor import threads
+        signal.signal(signal.SIGALRM, lambda signum, frame: os.kill(os.getpid(), signal.SIGINT))
+        random.seed(1)
+        late = interrupted = 0
+        for i in range(400):
+            finished = []
+            def kernel(lo, hi):
+                if lo:
+                    x = 0
+                    for _ in range(300):
+                        x += 1
+                    finished.append(lo)
+            try:
+                signal.setitimer(signal.ITIMER_REAL, random.uniform(1e-5, 6e-4))
+                threads.run(kernel, [(0, 1), (1, 2), (2, 3)])
+                signal.setitimer(signal.ITIMER_REAL, 0)
+            except KeyboardInterrupt:
+                interrupted += 1
+            seen = len(finished)
+            while True:
+                try:
+                    time.sleep(0.003)
+                    break
+                except KeyboardInterrupt:
+                    pass
+            late += len(finished) > seen
+        print("interrupted", interrupted, "late", late, "busy", threads._busy, flush=True)
+    """)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert " late 0 busy 0" in done.stdout and "interrupted 0 " not in done.stdout, done.stdout

@@ -14,22 +14,25 @@ Threads: numba's (``NUMBA_NUM_THREADS``, or what ``numba.set_num_threads`` set f
 parallel layer runs, e.g. after :func:`pnrotor.evolve_many`), at most :func:`limit`'s (the worker processes of a
 batch take one each: they already fill the cores); 1 computes everything on the calling thread.  A part has about
 the ``min_part`` samples its caller gives at least (:func:`parts`): handing a part to a worker and back costs ~40
-µs here (median of a call in two parts with nothing to compute; 34–51 µs from the 10th to the 90th percentile), and
+µs here (median of a call in two parts with nothing to compute; 37–63 µs from the 10th to the 90th percentile), and
 the parts slow each other where they share memory bandwidth (modes of 1,024 samples, ℓ ≤ 4: 214 µs in one part, 226
-in two; 2,048: 378 and 311; 4,096: 687 and 447).  The workers are daemon threads of this process, started by the first call that needs them and kept, idle,
-for the next ones (a forked child starts its own; a batch still forks its workers beside idle ones,
-:func:`idle_workers`).
+in two; 2,048: 378 and 311; 4,096: 687 and 447).  The workers are daemon threads of this process, started by the
+first call that needs them and kept, idle, for the next ones (a forked child starts its own; a batch stops idle
+ones before it forks its worker processes, :func:`stop_idle_workers`, so that no thread is copied into them).
 """
 
 import numbers
 import os
 import queue
+import signal
+import sys
 import threading
+from contextlib import contextmanager
 
 import numba
 from numba.np.ufunc import parallel as _numba_parallel
 
-__all__ = ["parts", "run", "thread_count", "limit", "idle_workers"]
+__all__ = ["parts", "run", "thread_count", "limit", "stop_idle_workers"]
 
 _limit = None
 """At most this many threads per call in this process (None: numba's count)."""
@@ -63,45 +66,81 @@ def parts(n, min_part, align=1):
 
 
 def run(kernel, ranges):
-    """kernel(lo, hi) for every range of :func:`parts`, the first on this thread and the others on the workers' at
-    the same time; returns when all are done, also when one raises (the first exception, this thread's first, is
-    raised) or a KeyboardInterrupt comes meanwhile (raised once they are done): no part writes after the call.  Where
-    no thread can be started (at interpreter shutdown), the whole range runs on this thread."""
+    """kernel(lo, hi) for every range of :func:`parts`: the first on this thread, the others handed to the workers,
+    and those no worker has started yet when this thread's own is done run here too (so concurrent or nested calls
+    never wait for a free worker).  Returns when every part is done or dropped, also when one raises: this thread's
+    exception (then the parts no thread has started are dropped), else the first part's in range order, is raised.  On the main thread a Ctrl-C during the call is held and
+    delivered once every part is done, so no part writes after the call.  During interpreter finalization the whole
+    range runs on this thread."""
+    if len(ranges) == 1 or sys.is_finalizing():
+        kernel(ranges[0][0], ranges[-1][1])
+        return
     handed = [_Part(kernel, lo, hi) for lo, hi in ranges[1:]]
-    if handed and not _hand_out(handed):
-        handed, ranges = [], [(ranges[0][0], ranges[-1][1])]
-    try:
-        kernel(*ranges[0])
-    finally:
-        _wait(handed)
-    for part in handed:
-        if part.error is not None:
-            raise part.error
+    error = None
+    with _sigint_held():
+        _hand_out(handed)
+        try:
+            kernel(*ranges[0])
+        except BaseException as e:
+            error = e
+        for part in handed:   # after an error here, the parts not started are dropped
+            part.run_if_unclaimed(compute=error is None)
+        for part in handed:
+            part.done.wait()
+            if error is None:
+                error = part.error
+            part.error = None   # no cycle through the traceback: the part's arrays go when the caller's do
+    if error is not None:
+        try:
+            raise error
+        finally:
+            error = None
 
 
-def idle_workers():
-    """How many worker threads this process has if none is computing a part, else 0: threads that a fork may
-    ignore (an idle worker holds no lock the child needs, and the child starts its own workers)."""
+def stop_idle_workers():
+    """Stop this process's worker threads if none has a part to compute: True if none is left then (a fork copies
+    no thread of pnrotor's; :mod:`pnrotor.batch` forks its workers only then), False if some are busy.  The next
+    call that splits starts them again."""
     with _lock:
-        return len(_workers) if _busy == 0 else 0
+        if _busy:
+            return False
+        stopping = list(_workers)
+        _workers.clear()
+    for _ in stopping:
+        _queue.put(None)
+    for worker in stopping:   # idle: each takes a None at once (one started meanwhile may take one instead)
+        worker.join(1.0)
+    return not any(worker.is_alive() for worker in stopping)
 
 
 class _Part:
-    """kernel(lo, hi) for a worker, then ``done`` set; ``error`` what it raised."""
+    """kernel(lo, hi) for whichever thread claims it first (a worker, or the caller once its own part is done), then
+    ``done`` set; ``error`` what it raised."""
 
-    __slots__ = ("kernel", "lo", "hi", "done", "error")
+    __slots__ = ("kernel", "lo", "hi", "claimed", "done", "error")
 
     def __init__(self, kernel, lo, hi):
         self.kernel, self.lo, self.hi = kernel, lo, hi
+        self.claimed = False
         self.done = threading.Event()
         self.error = None
 
-    def __call__(self):
+    def run_if_unclaimed(self, compute=True):
+        """Compute the part here unless another thread has claimed it (or, without ``compute``, just mark it done)."""
+        global _busy
+        with _lock:
+            if self.claimed:
+                return
+            self.claimed = True
         try:
-            self.kernel(self.lo, self.hi)
+            if compute:
+                self.kernel(self.lo, self.hi)
         except BaseException as e:   # the caller raises it
             self.error = e
         finally:
+            self.kernel = None   # a part left in the queue holds no arrays
+            with _lock:
+                _busy -= 1
             self.done.set()
 
 
@@ -109,49 +148,56 @@ _queue = queue.SimpleQueue()
 _workers = []
 """The worker threads (daemons, named pnrotor-k), started as calls need them, all taking parts from _queue."""
 _busy = 0
-"""Parts handed out and not finished yet."""
+"""Parts handed out and not finished yet (queued or being computed)."""
 _lock = threading.Lock()
 
 
 def _work(parts):
-    """A worker: runs the parts it is given, forever."""
-    global _busy
+    """A worker: computes the parts it is given that no other thread has claimed; None stops it."""
     while True:
-        parts.get()()
-        with _lock:
-            _busy -= 1
+        part = parts.get()
+        if part is None:
+            with _lock:
+                if threading.current_thread() in _workers:   # started after stop_idle_workers cleared the list
+                    _workers.remove(threading.current_thread())
+            return
+        part.run_if_unclaimed()
 
 
 def _hand_out(handed):
-    """Give the parts to the workers, starting as many as there are parts; False if there is no worker and none can
-    be started (interpreter shutdown)."""
+    """Queue the parts for the workers, first starting workers until as many are free as there are parts (as many
+    as can be started: at worst the caller computes its parts itself)."""
     global _busy
     with _lock:
         try:
-            while len(_workers) < len(handed):
+            while len(_workers) - _busy < len(handed):
                 worker = threading.Thread(target=_work, args=(_queue,), name=f"pnrotor-{len(_workers)}", daemon=True)
                 worker.start()
                 _workers.append(worker)
-        except RuntimeError:   # "can't create new thread at interpreter shutdown"
-            if not _workers:
-                return False
+        except RuntimeError:   # no new thread (interpreter shutdown, resource limits): the caller takes the rest
+            pass
         _busy += len(handed)
     for part in handed:
         _queue.put(part)
-    return True
 
 
-def _wait(handed):
-    """Wait until every part is done, a KeyboardInterrupt meanwhile raised only then."""
-    interrupted = None
-    for part in handed:
-        while not part.done.is_set():
-            try:
-                part.done.wait()
-            except KeyboardInterrupt as e:
-                interrupted = e
-    if interrupted is not None:
-        raise interrupted
+@contextmanager
+def _sigint_held():
+    """On the main thread: a SIGINT during the block is recorded and raised again after it (a KeyboardInterrupt
+    between two statements of :func:`run` could leave its counts wrong or its parts running after it).  Elsewhere,
+    or where Python does not own the SIGINT handler, nothing."""
+    previous = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
+    if previous is None:
+        yield
+        return
+    caught = []
+    signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if caught:
+            signal.raise_signal(signal.SIGINT)
 
 
 def _forget_workers():

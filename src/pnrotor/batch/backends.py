@@ -145,18 +145,18 @@ def chunk_size(n_tasks, jobs):
 
 
 def start_method():
-    """How worker processes start: 'fork' on Linux when this process runs no other thread but idle workers of
-    :mod:`pnrotor.threads` (a worker then starts in ~0.02 s with the PN code already loaded, against ~0.6 s for
-    'forkserver' and ~0.8 s for 'spawn', benchmarks/bench_batch.py); otherwise 'forkserver' (forking a process with
-    threads can deadlock the child), or 'spawn' where there is no forkserver (Windows)."""
+    """How worker processes start: 'fork' on Linux when this process runs no other thread (idle workers of
+    :mod:`pnrotor.threads` are stopped first; a worker then starts in ~0.02 s with the PN code already loaded, against
+    ~0.6 s for 'forkserver' and ~0.8 s for 'spawn', benchmarks/bench_batch.py); otherwise 'forkserver' (forking a
+    process with threads can deadlock the child), or 'spawn' where there is no forkserver (Windows)."""
     import multiprocessing
     import threading
 
     from pnrotor import threads
 
     methods = multiprocessing.get_all_start_methods()
-    if sys.platform.startswith("linux") and "fork" in methods and \
-            threading.active_count() - threads.idle_workers() == 1:
+    if sys.platform.startswith("linux") and "fork" in methods and threads.stop_idle_workers() and \
+            threading.active_count() == 1:
         return "fork"
     return "forkserver" if "forkserver" in methods else "spawn"
 
