@@ -144,16 +144,6 @@ def test_limit_caps_the_threads_and_checks_its_argument():
             threads.limit(bad)
 
 
-def test_dask_workers_take_one_thread_each():
-    distributed = pytest.importorskip("distributed")
-    from pnrotor.batch.backends import attempt_chunk_in_dask
-
-    with distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=2, dashboard_address=None) as cluster:
-        with distributed.Client(cluster) as client:
-            assert client.submit(attempt_chunk_in_dask, [], pure=False).result(timeout=120) == []
-            assert list(client.run(threads.thread_count).values()) == [1]
-
-
 def test_batch_workers_take_one_thread_each():
     from concurrent.futures import ProcessPoolExecutor
 

@@ -48,15 +48,6 @@ def attempt_chunk(chunk):
     return [(index, *attempt(params)) for index, params in chunk]
 
 
-def attempt_chunk_in_dask(chunk):
-    """`attempt_chunk` in a Dask worker, whose threads already run a task each: like the processes of a local
-    batch, the worker computes each run's modes on one thread (`pnrotor.threads.limit(1)`, for its process)."""
-    from pnrotor import threads
-
-    threads.limit(1)
-    return attempt_chunk(chunk)
-
-
 class Stored:
     """A run that a worker wrote into the part file `path` as group `group`, with the `brief` of it."""
 
@@ -284,7 +275,7 @@ def _dask_results(client, tasks):
     from distributed import as_completed
 
     with client:
-        futures = client.map(attempt_chunk_in_dask, [[task] for task in tasks], pure=False)
+        futures = client.map(attempt_chunk, [[task] for task in tasks], pure=False)
         chunk_of = {future.key: [task] for future, task in zip(futures, tasks)}
         for future in as_completed(futures, loop=client.loop):
             try:
