@@ -144,6 +144,38 @@ def test_limit_caps_the_threads_and_checks_its_argument():
             threads.limit(bad)
 
 
+def test_limited_caps_this_thread_only_inside_its_block():
+    before = threads.thread_count()
+    seen = {}
+    with threads.limited(1):
+        seen["here"] = threads.thread_count()
+        other = threading.Thread(target=lambda: seen.setdefault("other", threads.thread_count()))
+        other.start()
+        other.join()
+        assert threads.parts(10**6, 1) == [(0, 10**6)]
+    assert seen == {"here": 1, "other": before} and threads.thread_count() == before
+    with pytest.raises(ValueError, match="count must be None or an integer >= 1"):
+        with threads.limited(0):
+            pass
+    assert threads.thread_count() == before
+
+
+def test_dask_tasks_take_one_thread_each_and_leave_the_process_alone(monkeypatch):
+    """A batch's Dask tasks (an in-process cluster: the tasks run in this process, on the worker's threads) compute
+    on one thread each; this process's own calls keep theirs."""
+    distributed = pytest.importorskip("distributed")
+    from pnrotor.batch import backends
+
+    monkeypatch.setattr(backends, "attempt_chunk", lambda chunk: [(index, True, threads.thread_count())
+                                                                  for index, _ in chunk])
+    before = threads.thread_count()
+    with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=2,
+                                  dashboard_address=None) as cluster:
+        results = list(backends._dask_results(distributed.Client(cluster, set_as_default=False), [(0, {}), (1, {})]))
+    assert sorted(results) == [(0, True, 1), (1, True, 1)]
+    assert threads.thread_count() == before
+
+
 def test_batch_workers_take_one_thread_each():
     from concurrent.futures import ProcessPoolExecutor
 

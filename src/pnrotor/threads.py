@@ -12,13 +12,14 @@ precessing run at 1/4096 s 0.74 ms whole, 0.82 ms in two parts; 238,041 samples 
 
 Threads: numba's (``NUMBA_NUM_THREADS``, or what ``numba.set_num_threads`` set for the calling thread once numba's
 parallel layer runs, e.g. after :func:`pnrotor.evolve_many`), at most :func:`limit`'s (the worker processes of a
-batch take one each: they already fill the cores); 1 computes everything on the calling thread.  A part has about
-the ``min_part`` samples its caller gives at least (:func:`parts`): handing a part to a worker and back costs ~40
-µs here (median of a call in two parts with nothing to compute; 37–63 µs from the 10th to the 90th percentile), and
-the parts slow each other where they share memory bandwidth (modes of 1,024 samples, ℓ ≤ 4: 214 µs in one part, 226
-in two; 2,048: 378 and 311; 4,096: 687 and 447).  The workers are daemon threads of this process, started by the
-first call that needs them and kept, idle, for the next ones (a forked child starts its own; a batch stops idle
-ones before it forks its worker processes, :func:`stop_idle_workers`, so that no thread is copied into them).
+batch take one each: they already fill the cores) and :func:`limited`'s (a batch's Dask tasks: one each); 1 computes
+everything on the calling thread. A part has about the ``min_part`` samples its caller gives at least
+(:func:`parts`): handing a part to a worker and back costs ~40 µs here (median of a call in two parts with nothing
+to compute; 37–63 µs from the 10th to the 90th percentile), and the parts slow each other where they share memory
+bandwidth (modes of 1,024 samples, ℓ ≤ 4: 214 µs in one part, 226 in two; 2,048: 378 and 311; 4,096: 687 and 447).
+The workers are daemon threads of this process, started by the first call that needs them and kept, idle, for the
+next ones (a forked child starts its own; a batch stops idle ones before it forks its worker processes,
+:func:`stop_idle_workers`, so that no thread is copied into them).
 """
 
 import numbers
@@ -32,26 +33,49 @@ from contextlib import contextmanager
 import numba
 from numba.np.ufunc import parallel as _numba_parallel
 
-__all__ = ["parts", "run", "thread_count", "limit", "stop_idle_workers"]
+__all__ = ["parts", "run", "thread_count", "limit", "limited", "stop_idle_workers"]
 
 _limit = None
 """At most this many threads per call in this process (None: numba's count)."""
 
 
+_this_thread = threading.local()
+"""``limit``: at most this many threads per call made by this thread, inside :func:`limited`."""
+
+
 def limit(count):
     """Use at most ``count`` (≥ 1) threads per call in this process from now on; None: numba's count again."""
     global _limit
+    _limit = _checked(count)
+
+
+@contextmanager
+def limited(count):
+    """In the block, calls made by this thread use at most ``count`` (≥ 1) threads (a Dask task: the worker's other
+    threads run tasks of their own); other threads, and this one after the block, are not affected."""
+    before = getattr(_this_thread, "limit", None)
+    _this_thread.limit = _checked(count)
+    try:
+        yield
+    finally:
+        _this_thread.limit = before
+
+
+def _checked(count):
     if count is not None and (isinstance(count, bool) or not isinstance(count, numbers.Integral) or count < 1):
         raise ValueError(f"count must be None or an integer >= 1; got {count!r}")
-    _limit = count
+    return count
 
 
 def thread_count():
     """Threads for one call: numba's current count once its parallel layer is running (launching it costs ~50 ms),
-    else ``numba.config.NUMBA_NUM_THREADS``; at most :func:`limit`'s."""
+    else ``numba.config.NUMBA_NUM_THREADS``; at most :func:`limit`'s and :func:`limited`'s."""
     count = numba.get_num_threads() if getattr(_numba_parallel, "_is_initialized", False) else \
         numba.config.NUMBA_NUM_THREADS
-    return count if _limit is None else min(count, _limit)
+    for cap in (_limit, getattr(_this_thread, "limit", None)):
+        if cap is not None:
+            count = min(count, cap)
+    return count
 
 
 def parts(n, min_part, align=1):

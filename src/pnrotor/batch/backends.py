@@ -48,6 +48,16 @@ def attempt_chunk(chunk):
     return [(index, *attempt(params)) for index, params in chunk]
 
 
+def attempt_chunk_in_dask(chunk):
+    """`attempt_chunk` as a task on a Dask worker, whose other threads run tasks of their own: each run's modes on
+    this task's thread alone (`pnrotor.threads.limited`; the worker process, and the caller's with an in-process
+    cluster, keep their threads)."""
+    from pnrotor import threads
+
+    with threads.limited(1):
+        return attempt_chunk(chunk)
+
+
 class Stored:
     """A run that a worker wrote into the part file `path` as group `group`, with the `brief` of it."""
 
@@ -275,7 +285,7 @@ def _dask_results(client, tasks):
     from distributed import as_completed
 
     with client:
-        futures = client.map(attempt_chunk, [[task] for task in tasks], pure=False)
+        futures = client.map(attempt_chunk_in_dask, [[task] for task in tasks], pure=False)
         chunk_of = {future.key: [task] for future, task in zip(futures, tasks)}
         for future in as_completed(futures, loop=client.loop):
             try:
