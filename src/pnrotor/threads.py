@@ -62,6 +62,8 @@ def limited(count):
 
 
 def _checked(count):
+    """``count`` of :func:`limit` and :func:`limited`: None or an integer ≥ 1 (Python's or numpy's, not a bool), else a
+    ValueError naming it."""
     if count is not None and (isinstance(count, bool) or not isinstance(count, numbers.Integral) or count < 1):
         raise ValueError(f"count must be None or an integer >= 1; got {count!r}")
     return count
