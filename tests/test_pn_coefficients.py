@@ -336,3 +336,42 @@ def test_spin_independent_parts_of_a_population_are_bitwise_those_of_each_binary
                                                 3.0, rotor, shift, omega_l)
             for a, b in zip(one, many):
                 np.testing.assert_array_equal(a[0], b[i])
+
+
+@pytest.mark.parametrize("spins", ["precessing", "aligned"])
+def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
+    """evolve_many builds the parameter vectors and start checks of a whole population in one call of
+    system.start_rows, evolve those of its one binary: each row must be bitwise the other's (p, y0, the spin
+    invariants and the five start checks), whatever the order of the rows taken from the spin-independent parts;
+    and make_parameters' p (no start check) equals that p."""
+    from pnrotor.pn.evolve import _OPTIONS, build_rows, build_system, population_parts
+    from pnrotor.pn.settings import settings
+    rng = np.random.default_rng(12)
+    n = 40
+    m1, m2 = rng.uniform(5.0, 40.0, n), rng.uniform(1.0, 20.0, n)
+    c1, c2 = rng.uniform(-0.5, 0.5, (n, 3)), rng.uniform(-0.5, 0.5, (n, 3))
+    if spins == "aligned":
+        c1[:, :2] = c2[:, :2] = 0.0
+    options = {**_OPTIONS, "sampling": "final", "kappa1": 4.0, "kappa2": 2.0, "ell_hat": (0.6, 0.0, 0.8),
+               "n_hat": (0.0, 1.0, 0.0)}
+    ss = [settings(m1[i], m2[i], c1[i] if spins == "precessing" else 0.8 * c1[i, 2] * np.array([0.6, 0.0, 0.8]),
+                   c2[i] if spins == "precessing" else 0.8 * c2[i, 2] * np.array([0.6, 0.0, 0.8]), 20.0, **options)
+          for i in range(n)]
+    assert {s.spin_content for s in ss} == {spins}
+    order = rng.permutation(n)             # row i from row order[i] of the parts
+    X1 = np.empty(n)
+    X1[order] = [s.X1 for s in ss]
+    parts = population_parts(ss[0], X1, np.full(n, 4.0), np.full(n, 2.0))
+    rhs, events, P, Y0, bases, checks = build_rows(ss, parts, order)
+    assert Y0.shape[1] == (2 if spins == "aligned" else 12) and np.all(checks[:, :4] > 0.0)
+    for i, s in enumerate(ss):
+        one = build_system(s)
+        assert (one.rhs, one.events) == (rhs, events)
+        for a, b in ((one.p, P[i]), (one.y0, Y0[i]), (one.basis, bases[i])):
+            np.testing.assert_array_equal(a, b)
+        np.testing.assert_array_equal(build_rows([s], parts, order[i:i + 1])[5][0], checks[i])
+        p = system.make_parameters(s.X1, s.approximant, one.kmax, so_order=s.spin_orbit_order,
+                                   ss_order=s.spin_spin_order, kappa1=4.0, kappa2=2.0,
+                                   spin_tol=system.spin_tolerance(s.atol, s.rtol), phase_shift=s.precession_phase_shift,
+                                   aligned_basis=bases[i] if spins == "aligned" else None)
+        np.testing.assert_array_equal(p, P[i])
