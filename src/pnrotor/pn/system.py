@@ -509,67 +509,50 @@ def _past_end(events, y, p, values, v):
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
                     spin_tol=SPIN_TOL, rotor="coprecessing", phase_shift=False, aligned_basis=None,
-                    omega_l="torque"):
-    """The parameter vector p of one binary (the runs build theirs by :func:`start_rows`).
+                    omega_l="torque", basis=None, v_check=None, parts=None):
+    """Build the parameter vector p.
 
     ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
     invariants for the aligned/nonspinning right-hand side (folded into the series), or None for the
-    precessing one.  ``spin_tol``: how far |χᵢ|² may exceed 1 before events 3/4 end the run
-    (:func:`spin_tolerance`).
+    precessing one.
+    With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′, event 6) at
+    v_check) instead of p, for checking the initial point.
+    ``spin_tol``: how far |χᵢ|² may exceed 1 before events 3/4 end the run (:func:`spin_tolerance`).
+    Everything but v_end, spin_tol and the stored series is ``parts``, this binary's row of :func:`spin_independent_parts`
+    (for a population, built for all its binaries at once), or by default from :func:`_spin_independent_parts`
+    (cached).
     """
-    head, N, D, Ep = (x[0] for x in one_binary_parts(X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, rotor,
-                                                     phase_shift, omega_l))
+    if parts is None:
+        parts = _spin_independent_parts(
+            (X1, approximant, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
+             math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), rotor, bool(phase_shift), omega_l))
+    head, N, D, Ep = parts
     p = np.zeros(P_SIZE)
     p[:P_NUM] = head
     p[P_VEND] = v_end
     p[P_SPINTOL] = spin_tol
     fold = aligned_basis is not None
-    _store_series(N, D, Ep, np.asarray(aligned_basis if fold else _UNIT_BASIS, dtype=np.float64), fold, p, 0.5)
-    return p
-
-
-@njit(cache=True)
-def start_rows(heads, N, D, Ep, rows, bases, fold, v_end, spin_tol, c_addr, jit_addr, Y0, P, checks):
-    """The parameter vectors P (zeros on entry) of binaries i = 0 … n−1 and the checks of their start: row i
-    from row rows[i] of the spin-independent parts (heads, N, D, Ê′: :func:`spin_independent_parts`), the
-    spin invariants bases[i] (folded into the series if ``fold``: the aligned right-hand side), the end
-    v_end[i] and the common ``spin_tol`` (:func:`spin_tolerance`); checks[i] = (N, D, Ê′, event 6 at
-    v₀ = Y0[i, 0], :func:`earlier_end` of the initial state Y0[i] with the events at these addresses).  One
-    call for a whole population (``evolve_many``) or for one binary (``evolve``): the same numbers either way."""
-    for i in range(P.shape[0]):
-        j = rows[i]
-        p = P[i]
-        p[:P_NUM] = heads[j]
-        p[P_VEND] = v_end[i]
-        p[P_SPINTOL] = spin_tol
-        checks[i, 0], checks[i, 1], checks[i, 2], checks[i, 3] = _store_series(N[j], D[j], Ep[j], bases[i], fold,
-                                                                                p, Y0[i, Y_V])
-        checks[i, 4] = earlier_end(c_addr, jit_addr, Y0[i], p)
-
-
-def one_binary_parts(X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, rotor, phase_shift, omega_l):
-    """:func:`spin_independent_parts` of one binary (arrays of one row), from a small cache
-    (:func:`_spin_independent_parts`)."""
-    return _spin_independent_parts(
-        (X1, approximant, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
-         math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), rotor, bool(phase_shift), omega_l))
+    b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
+    at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
+    return p if v_check is None else (p, at_v)
 
 
 @functools.lru_cache(maxsize=64)
 def _spin_independent_parts(key):
     """:func:`spin_independent_parts` of one binary, ``key`` = (X1, approximant, kmax as a tuple, so_order,
     ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives other signed zeros), rotor, phase_shift,
-    omega_l), as (p head, N, D, Ê′) each with one row, kept in a small LRU cache (repeated runs of one binary, or
-    of one mass ratio, skip its ~65 µs of Python; code that replaces a coefficient function must call
-    ``_spin_independent_parts.cache_clear()``).  The arrays are shared: their users copy the head and only read
-    the series."""
+    omega_l), as (p head, N, D, Ê′), kept in a small LRU cache (repeated runs of one binary, or of one mass
+    ratio, skip its ~65 µs of Python; code that replaces a coefficient function must call
+    ``_spin_independent_parts.cache_clear()``).  The arrays are shared: make_parameters copies the head and only
+    reads the series."""
     X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, _, _, rotor, phase_shift, omega_l = key
-    return spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor, phase_shift,
-                                  omega_l)
+    p, N, D, Ep = spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor,
+                                         phase_shift, omega_l)
+    return p[0], N[0], D[0], Ep[0]
 
 
 def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor, phase_shift, omega_l):
-    """Everything :func:`start_rows` (and :func:`make_parameters`) builds that does not depend on the spins or v_end, for n binaries
+    """Everything :func:`make_parameters` builds that does not depend on the spins or v_end, for n binaries
     that share the options and differ in X1, κ₁, κ₂ (arrays (n,), or floats for one binary): (heads
     (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
     :func:`vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
