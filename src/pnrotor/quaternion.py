@@ -237,6 +237,14 @@ def qframe_error(Ra, Re):
 _Q2 = ["void(float64[:], float64[:], float64[:])"]
 
 
+@njit(cache=True)
+def _put(r, out):
+    """out[:] = r, element by element: an array slice assignment compiles numba's shape-mismatch error path with its
+    string formatting, ~2.7 s of a cold process's first gufunc (benchmarks/bench_compile.py)."""
+    for k in range(out.shape[0]):
+        out[k] = r[k]
+
+
 def _gufunc(signatures, layout):
     """``guvectorize(signatures, layout, cache=True)``, built on the first call rather than at import: numba
     compiles (or loads from its cache) a gufunc with explicit signatures when it is decorated, and the
@@ -258,19 +266,19 @@ def _gufunc(signatures, layout):
 @_gufunc(_Q2, "(n),(n)->(n)")
 def multiply(a, b, out):
     """Hamilton product a b of quaternion arrays (..., 4)."""
-    out[:] = qmul(a, b)
+    _put(qmul(a, b), out)
 
 
 @_gufunc(["void(float64[:], float64[:])"], "(n)->(n)")
 def conjugate(q, out):
     """Conjugate of quaternion arrays (..., 4)."""
-    out[:] = qconj(q)
+    _put(qconj(q), out)
 
 
 @_gufunc(["void(float64[:], float64[:])"], "(n)->(n)")
 def inverse(q, out):
     """Inverse q̄/|q|² of quaternion arrays (..., 4)."""
-    out[:] = qinv(q)
+    _put(qinv(q), out)
 
 
 @_gufunc(["void(float64[:], float64[:])"], "(n)->()")
@@ -282,19 +290,19 @@ def norm(q, out):
 @_gufunc(["void(float64[:], float64[:])"], "(n)->(n)")
 def normalize(q, out):
     """q/|q| for quaternion arrays (..., 4)."""
-    out[:] = qnormalize(q)
+    _put(qnormalize(q), out)
 
 
 @_gufunc(["void(float64[:], float64[:], float64[:])"], "(n),(m)->(m)")
 def rotate(R, v, out):
     """R v R⁻¹ for rotors (..., 4) of any norm in (1e-150, 1e150) (:func:`qrotate`) and vectors (..., 3)
     (eq:rotor-rotation)."""
-    out[:] = qrotate(R, v)
+    _put(qrotate(R, v), out)
 
 
 @_gufunc(["void(float64[:], float64[:], float64[:])"], "(m),(n)->(n)")
 def _exp(r, dummy, out):
-    out[:] = qexp(r)
+    _put(qexp(r), out)
 
 
 def exp(r):
@@ -304,7 +312,7 @@ def exp(r):
 
 @_gufunc(["void(float64[:], float64[:], float64[:])"], "(n),(m)->(m)")
 def _log(q, dummy, out):
-    out[:] = qlog(q)
+    _put(qlog(q), out)
 
 
 def log(q):
@@ -315,7 +323,9 @@ def log(q):
 
 @_gufunc(["void(float64[:], float64[:,:], float64[:,:])"], "(n),(m,m)->(m,m)")
 def _to_matrix(R, dummy, out):
-    out[:, :] = qto_matrix(R)
+    m = qto_matrix(R)
+    for i in range(3):
+        _put(m[i], out[i])
 
 
 def to_matrix(R):
@@ -326,7 +336,7 @@ def to_matrix(R):
 
 @_gufunc(["void(float64[:,:], float64[:], float64[:])"], "(m,m),(n)->(n)")
 def _from_matrix(M, dummy, out):
-    out[:] = qfrom_matrix(M)
+    _put(qfrom_matrix(M), out)
 
 
 def from_matrix(M):
