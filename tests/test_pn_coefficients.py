@@ -336,3 +336,53 @@ def test_spin_independent_parts_of_a_population_are_bitwise_those_of_each_binary
                                                 3.0, rotor, shift, omega_l)
             for a, b in zip(one, many):
                 np.testing.assert_array_equal(a[0], b[i])
+
+
+@pytest.mark.parametrize("spins", ["precessing", "aligned"])
+def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
+    """evolve_many builds the parameter vectors and start checks of a whole population in one call of
+    system.start_rows (evolve.build_rows), evolve those of its one binary by make_parameters and earlier_end
+    (evolve.build_system): each row must be bitwise the other's (p, y0, the spin invariants, the start checks),
+    whatever the order of the rows taken from the spin-independent parts."""
+    from pnrotor.pn.evolve import _OPTIONS, build_rows, build_system, population_parts
+    from pnrotor.pn.settings import settings
+    rng = np.random.default_rng(12)
+    n = 40
+    m1, m2 = rng.uniform(5.0, 40.0, n), rng.uniform(1.0, 20.0, n)
+    c1, c2 = rng.uniform(-0.5, 0.5, (n, 3)), rng.uniform(-0.5, 0.5, (n, 3))
+    ell = np.array([0.6, 0.0, 0.8])
+    if spins == "aligned":
+        c1, c2 = c1[:, 2:] * ell, c2[:, 2:] * ell
+    options = {**_OPTIONS, "sampling": "final", "kappa1": 4.0, "kappa2": 2.0, "ell_hat": ell, "n_hat": (0.0, 1.0, 0.0)}
+    ss = [settings(m1[i], m2[i], c1[i], c2[i], 20.0, **{**options, "f_max": 200.0 + i}) for i in range(n)]
+    assert {s.spin_content for s in ss} == {spins}
+    order = rng.permutation(n)             # row i from row order[i] of the parts
+    X1 = np.empty(n)
+    X1[order] = [s.X1 for s in ss]
+    parts = population_parts(ss[0], X1, np.full(n, 4.0), np.full(n, 2.0))
+    rhs, events, P, Y0, bases, checks = build_rows(ss, parts, order)
+    assert Y0.shape[1] == (2 if spins == "aligned" else 12) and np.all(checks[:, :4] > 0.0)
+    for i, s in enumerate(ss):
+        one = build_system(s)
+        assert (one.rhs, one.events) == (rhs, events)
+        for a, b in ((one.p, P[i]), (one.y0, Y0[i]), (one.basis, bases[i])):
+            np.testing.assert_array_equal(a, b)
+        p, at_v0 = system.make_parameters(
+            s.X1, s.approximant, one.kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=4.0,
+            kappa2=2.0, v_end=s.v_max, spin_tol=system.spin_tolerance(s.atol, s.rtol),
+            phase_shift=s.precession_phase_shift, aligned_basis=bases[i] if spins == "aligned" else None,
+            basis=bases[i], v_check=s.v0)
+        np.testing.assert_array_equal(checks[i], [*at_v0, system.earlier_end(*events.addresses, one.y0, p)])
+
+
+def test_a_population_member_past_the_end_of_its_inspiral_gets_evolves_message():
+    """build_rows' start checks refuse what build_system refuses (f_ref past the end of the inspiral, found at v0 or
+    below it), with its message, and leave the others of the population."""
+    from pnrotor.pn import evolve, evolve_many
+    f_ref = [20.0, 1000.0, 600.0, 30.0]
+    pop = evolve_many(30.0, 10.0, [0, 0, 0.5], [0, 0, -0.3], f_ref)
+    assert pop.termination.tolist() == ["energy_balance", "invalid", "invalid", "energy_balance"]
+    for i in (1, 2):
+        with pytest.raises(ValueError) as refusal:
+            evolve(30.0, 10.0, [0, 0, 0.5], [0, 0, -0.3], f_ref[i])
+        assert pop.message[i] == str(refusal.value) and "past the end" in pop.message[i]

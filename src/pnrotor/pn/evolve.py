@@ -11,7 +11,7 @@ binaries or waveform modes) can compose:
    [v, χ₁, χ₂, R, Φ]) otherwise or when ``integrate_rotor=True`` (or
    :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with ``precession='instantaneous'``) — its
    events, parameter vector and initial state, and the check that f_ref is inside the inspiral
-   → :class:`System`;
+   → :class:`System` (:func:`build_rows` for many binaries at once);
 3. :func:`integrate_half`: DOP853 backward to f_min (if given) and forward to f_max or to termination,
    each with terminal events; both halves share t = 0;
 4. :func:`pnrotor.pn.sampling.sample`: the two halves stitched into one history, from the integrator's
@@ -176,21 +176,33 @@ class System:
     basis: np.ndarray
 
 
-def build_system(s, parts=None):
+def build_system(s):
     """The :class:`System` of :class:`~pnrotor.pn.settings.Settings` ``s``; a ValueError if f_ref is at or
-    past the end of the inspiral (the terminal events only fire on crossing zero, so none may start there).
-    ``parts``: the binary's row of :func:`pnrotor.pn.system.spin_independent_parts`, if already built."""
-    kmax = kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order)
-    c1, c2, ell = s.chi1, s.chi2, s.ell_hat
-    (x1, y1, z1), (x2, y2, z2), (lx, ly, lz) = c1.tolist(), c2.tolist(), ell.tolist()   # floats: cheaper than np.dot
-    bvals = basis_values(lx * x1 + ly * y1 + lz * z1, lx * x2 + ly * y2 + lz * z2, x1 * x2 + y1 * y2 + z1 * z2,
-                         x1 * x1 + y1 * y1 + z1 * z1, x2 * x2 + y2 * y2 + z2 * z2)
+    past the end of the inspiral (the terminal events only fire on crossing zero, so none may start there)."""
+    kmax = kmax_of(s)
+    rhs, events, bvals, y0 = _start(s)
     p, at_v0 = _sys.make_parameters(
         s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
         kappa2=s.kappa2, v_end=s.v_max, spin_tol=_sys.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
         phase_shift=s.precession_phase_shift,
-        aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
-        parts=parts)
+        aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0)
+    _check_start(s, kmax, bvals, *at_v0, _sys.earlier_end(*events.addresses, y0, p))
+    return System(rhs, events, p, y0, kmax, bvals)
+
+
+def kmax_of(s):
+    """The PN truncation of settings ``s`` (:func:`pnrotor.pn.series.kmax_from_orders`)."""
+    return kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order)
+
+
+def _start(s):
+    """(right-hand side and events by address, spin invariants at f_ref, initial state) of settings ``s``:
+    :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) for nonspinning and aligned spins, else
+    :func:`~pnrotor.pn.system.rhs_precessing` (state [v, χ₁, χ₂, R, Φ]; or
+    :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with ``precession='instantaneous'``)."""
+    (x1, y1, z1), (x2, y2, z2), (lx, ly, lz) = s.chi1.tolist(), s.chi2.tolist(), s.ell_hat.tolist()   # floats:
+    bvals = basis_values(lx * x1 + ly * y1 + lz * z1, lx * x2 + ly * y2 + lz * z2,   # cheaper than np.dot
+                         x1 * x2 + y1 * y2 + z1 * z2, x1 * x1 + y1 * y1 + z1 * z1, x2 * x2 + y2 * y2 + z2 * z2)
     if s.use_aligned:
         rhs, events = _sys.rhs_aligned, _sys.events_aligned
         y0 = np.array([s.v0, 0.0])
@@ -199,9 +211,23 @@ def build_system(s, parts=None):
         events = _sys.events_precessing
         y0 = np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0])   # [v, χ₁, χ₂, R, Φ]
     # they cannot raise (error_model='numpy'), so they may go to the integrator by address
-    events = by_address(events, EVENTS_SIG)
-    _check_start(s, kmax, bvals, *at_v0, _sys.earlier_end(*events.addresses, y0, p))
-    return System(by_address(rhs, RHS_SIG), events, p, y0, kmax, bvals)
+    return by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG), bvals, y0
+
+
+def build_rows(ss, parts, rows):
+    """What :func:`build_system` builds and checks, for binaries ``ss`` (Settings with the same options and spin
+    content) in one compiled call (:func:`pnrotor.pn.system.start_rows`: ``evolve_many``): (right-hand side,
+    events, parameter vectors P (n, P_SIZE), initial states Y0 (n, size), spin invariants (n, 9), start checks
+    (n, 5): ``_check_start(s, kmax, invariants, *checks)`` raises for binary i what build_system would), binary i
+    from row rows[i] of the spin-independent ``parts`` (:func:`population_parts`).  Bitwise build_system's numbers
+    (tests/test_pn_coefficients.py)."""
+    starts = [_start(s) for s in ss]
+    rhs, events = starts[0][:2]
+    bases, Y0 = np.array([x[2] for x in starts]), np.array([x[3] for x in starts])
+    P, checks = np.zeros((len(ss), _sys.P_SIZE)), np.empty((len(ss), 5))
+    _sys.start_rows(*parts, rows, bases, ss[0].use_aligned, np.array([s.v_max for s in ss]),
+                    _sys.spin_tolerance(ss[0].atol, ss[0].rtol), *events.addresses, Y0, P, checks)
+    return rhs, events, P, Y0, bases, checks
 
 
 def _omega_l(s):
@@ -210,9 +236,8 @@ def _omega_l(s):
 
 def population_parts(s, X1, kappa1, kappa2):
     """:func:`pnrotor.pn.system.spin_independent_parts` of binaries with the model options of settings ``s``
-    and arrays X1, κ₁, κ₂ (row i is what :func:`build_system` takes as ``parts`` for binary i)."""
-    return _sys.spin_independent_parts(X1, kappa1, kappa2, s.approximant,
-                                       kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order),
+    and arrays X1, κ₁, κ₂ (row i is what :func:`build_rows` takes for binary i)."""
+    return _sys.spin_independent_parts(X1, kappa1, kappa2, s.approximant, kmax_of(s),
                                        s.spin_orbit_order, s.spin_spin_order, s.rotor, s.precession_phase_shift,
                                        _omega_l(s))
 
@@ -243,14 +268,15 @@ _BACKWARD_EVENTS = np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0])
 backward; the denominator of v̇ and event 6 falling; the others on any crossing."""
 
 
-def half(s, system, forward):
-    """(p, t_end, event directions, name of the end-frequency termination) of the forward half (to f_max,
-    or to the end of the inspiral within 4τ_N(v₀) + 10⁴ M) or the backward half (to f_min, within twice
-    the Newtonian time from f_min to f_ref + 10⁴ M)."""
+def half(s, p, forward):
+    """(parameter vector, t_end, event directions, name of the end-frequency termination) of the forward half (to
+    f_max, or to the end of the inspiral within 4τ_N(v₀) + 10⁴ M) or the backward half (to f_min, within twice
+    the Newtonian time from f_min to f_ref + 10⁴ M) of the run with parameter vector ``p`` (a copy with
+    v_end = v_min for the backward half)."""
     tau0 = _ini.newtonian_time_to_coalescence(s.v0, s.nu)
     if forward:
-        return system.p, 4.0 * tau0 + 1.0e4, _FORWARD_EVENTS, "f_max" if s.f_max is not None else "v_max"
-    p = system.p.copy()
+        return p, 4.0 * tau0 + 1.0e4, _FORWARD_EVENTS, "f_max" if s.f_max is not None else "v_max"
+    p = p.copy()
     p[_sys.P_VEND] = s.v_min
     t_end = -(2.0 * (_ini.newtonian_time_to_coalescence(s.v_min, s.nu) - tau0) + 1.0e4)
     return p, t_end, _BACKWARD_EVENTS, "f_min"
@@ -264,7 +290,7 @@ def integrate_half(s, system, forward, t_eval, dense):
     is None (every step) or 'final'.  What :func:`pnrotor.ode.dop853` would check is guaranteed by
     :func:`~pnrotor.pn.settings.settings` and :func:`build_system`, so its core is called directly
     (``pnrotor.ode.dop853._integrate``)."""
-    p, t_end, directions, end = half(s, system, forward)
+    p, t_end, directions, end = half(s, system.p, forward)
     res = _integrate(system.rhs, _default_hook("after_step"), system.events, 0.0, system.y0, t_end, p,
                      *_tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
                      _NO_T_EVAL, OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, _sys.N_EVENTS, directions,

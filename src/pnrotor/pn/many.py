@@ -7,11 +7,12 @@ of those states, binary by binary:
 
 * per chunk of :data:`CHUNK` binaries, the part of the parameter vectors that depends on the masses and κᵢ
   alone is built for all of them in one pass of numpy (:func:`pnrotor.pn.system.spin_independent_parts`,
-  bitwise each binary's own numbers); then each binary's inputs are checked and its system built by the
-  same stages as ``evolve`` (:func:`~pnrotor.pn.settings.settings`, its shared options checked once,
-  :func:`~pnrotor.pn.evolve.build_system`, :func:`~pnrotor.pn.evolve.half`); a binary whose inputs are
-  invalid gets termination ``'invalid'`` and the error's text as its message, NaN in its state, and the
-  others go on;
+  bitwise each binary's own numbers); then each binary's inputs are checked by the same stage as ``evolve``
+  (:func:`~pnrotor.pn.settings.binary_settings`, the shared options checked once), and the parameter vectors,
+  initial states and start checks that ``evolve`` builds one at a time (:func:`~pnrotor.pn.evolve.build_system`)
+  are built for all of them in one compiled call per spin content (:func:`~pnrotor.pn.evolve.build_rows`); a
+  binary whose inputs are invalid gets termination ``'invalid'`` and the error's text as its message, NaN in its
+  state, and the others go on;
 * the integrations run in one ``numba.prange`` loop over the chunk's binaries (threads across cores), each
   a call of the DOP853 core with output of the final state only (and of the dense output where a list has
   nearer targets), grouped by right-hand side (the [v, Φ] system of nonspinning and aligned binaries, the
@@ -47,8 +48,8 @@ from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NST
                           no_after_step)
 from ..ode.result import contd8
 from . import initial as _ini
-from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _tolerances, build_system, half, population_parts,
-                     termination)
+from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _tolerances, build_rows, half, kmax_of,
+                     population_parts, termination)
 from .sampling import _fill_history, output_mode
 from .settings import binary_settings, options, target_v
 from .system import EV_V_END, N_EVENTS, P_VEND
@@ -396,13 +397,24 @@ integrate_rotor, precession, max_steps
     # per binary in Python floats and lists: numpy on a few numbers costs ~0.5-1 µs per operation
     f_all, m1l, m2l, frl, k1l, k2l, c1l, c2l, elll, nhl = (x.tolist() for x in (targets, m1a, m2a, fref, k1, k2, c1,
                                                                                 c2, ell, nh))
+    kmax = kmax_of(reference)
+
+    def refuse(i, skip, e):
+        """Binary i invalid (the ValueError e): its message on its rows, or a refused target's (``skip``) where that
+        check comes first in evolve's order."""
+        out.message[i * K:(i + 1) * K] = str(e)
+        for k, why in skip.items():
+            if _first_error(opts, m1l[i], m2l[i], c1l[i], c2l[i], frl[i], f_all[i][k], elll[i], nhl[i], k1l[i],
+                            k2l[i]) not in (None, str(e)):
+                out.message[i * K + k] = why
+
     integrating = 0.0
     with _collector_paused():
         for start in range(0, n, CHUNK):
             stop = min(start + CHUNK, n)
             with np.errstate(all="ignore"):
                 parts = population_parts(reference, X1[start:stop], k1[start:stop], k2[start:stop])
-            groups = {}
+            kinds = {}    # spin content → [(binary, settings, refused targets, targets ahead, targets behind)]
             for i in range(start, stop):
                 f, fr = f_all[i], frl[i]
                 skip = _refused_targets(f, m1l[i], m2l[i], fr) if listed else {}
@@ -414,29 +426,35 @@ integrate_rotor, precession, max_steps
                     s = binary_settings(opts, m1l[i], m2l[i], c1l[i], c2l[i], fr,
                                         min(f[k] for k in behind) if behind else None,
                                         max(f_ahead) if f_ahead else None, elll[i], nhl[i], k1l[i], k2l[i])
-                    system = build_system(s, tuple(x[i - start] for x in parts))
                 except ValueError as e:
-                    out.message[i * K:(i + 1) * K] = str(e)
-                    for k, why in skip.items():   # a refused target whose check comes first in evolve's order
-                        if _first_error(opts, m1l[i], m2l[i], c1l[i], c2l[i], fr, f[k], elll[i], nhl[i], k1l[i],
-                                        k2l[i]) not in (None, str(e)):
-                            out.message[i * K + k] = why
+                    refuse(i, skip, e)
                     continue
-                for k, why in skip.items():
-                    out.message[i * K + k] = why
-                M_sec[i * K:(i + 1) * K] = s.M_sec
-                for forward, ks in ((True, ahead), (False, behind)):
-                    if not ks:
+                kinds.setdefault(s.use_aligned, []).append((i, s, skip, ahead, behind))
+            groups = {}
+            for members in kinds.values():
+                rhs, events, P, Y0, bases, checks = build_rows(
+                    [m[1] for m in members], parts, np.array([m[0] - start for m in members], dtype=np.int64))
+                for j, (i, s, skip, ahead, behind) in enumerate(members):
+                    try:
+                        _check_start(s, kmax, bases[j], *checks[j].tolist())
+                    except ValueError as e:
+                        refuse(i, skip, e)
                         continue
-                    p, t_end, directions, end = half(s, system, forward)
-                    # the farthest target ends the integration; the others are found on its dense output
-                    v_k = sorted((_ini.v_from_frequency(f[k], s.M_sec), i * K + k) for k in ks)
-                    if not forward:
-                        v_k.reverse()
-                    for _, r in v_k:
-                        ends[r] = end
-                    key = (system.rhs, system.events, output_mode(s), system.y0.size)
-                    groups.setdefault(key, []).append((v_k[-1][1], system.y0, p, t_end, directions, s, v_k[:-1]))
+                    for k, why in skip.items():
+                        out.message[i * K + k] = why
+                    M_sec[i * K:(i + 1) * K] = s.M_sec
+                    for forward, ks in ((True, ahead), (False, behind)):
+                        if not ks:
+                            continue
+                        p, t_end, directions, end = half(s, P[j], forward)
+                        # the farthest target ends the integration; the others are found on its dense output
+                        v_k = sorted((_ini.v_from_frequency(f_all[i][k], s.M_sec), i * K + k) for k in ks)
+                        if not forward:
+                            v_k.reverse()
+                        for _, r in v_k:
+                            ends[r] = end
+                        key = (rhs, events, output_mode(s), Y0.shape[1])
+                        groups.setdefault(key, []).append((v_k[-1][1], Y0[j], p, t_end, directions, s, v_k[:-1]))
             integrating += _integrate_groups(groups, float(atol), float(rtol), int(max_steps), out, counts)
     named = {}    # (status, event, end) → termination: a few kinds among many rows
     for r, key in enumerate(zip(counts[:, 0].tolist(), counts[:, 1].tolist(), ends)):

@@ -509,7 +509,7 @@ def _past_end(events, y, p, values, v):
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
                     spin_tol=SPIN_TOL, rotor="coprecessing", phase_shift=False, aligned_basis=None,
-                    omega_l="torque", basis=None, v_check=None, parts=None):
+                    omega_l="torque", basis=None, v_check=None):
     """Build the parameter vector p.
 
     ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
@@ -518,15 +518,12 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′, event 6) at
     v_check) instead of p, for checking the initial point.
     ``spin_tol``: how far |χᵢ|² may exceed 1 before events 3/4 end the run (:func:`spin_tolerance`).
-    Everything but v_end, spin_tol and the stored series is ``parts``, this binary's row of :func:`spin_independent_parts`
-    (for a population, built for all its binaries at once), or by default from :func:`_spin_independent_parts`
-    (cached).
+    Everything but v_end, spin_tol and the stored series comes from :func:`_spin_independent_parts` (cached).
+    :func:`start_rows` builds the same p for many binaries at once.
     """
-    if parts is None:
-        parts = _spin_independent_parts(
-            (X1, approximant, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
-             math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), rotor, bool(phase_shift), omega_l))
-    head, N, D, Ep = parts
+    head, N, D, Ep = _spin_independent_parts(
+        (X1, approximant, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
+         math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), rotor, bool(phase_shift), omega_l))
     p = np.zeros(P_SIZE)
     p[:P_NUM] = head
     p[P_VEND] = v_end
@@ -535,6 +532,26 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
     at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
     return p if v_check is None else (p, at_v)
+
+
+@njit(cache=True)
+def start_rows(heads, N, D, Ep, rows, bases, fold, v_end, spin_tol, c_addr, jit_addr, Y0, P, checks):
+    """:func:`make_parameters` with ``v_check`` and :func:`earlier_end` for binaries i = 0 … n−1 (``evolve_many``'s
+    set-up of a population, ``pnrotor.pn.evolve.build_rows``): P[i] (zeros on entry) is binary i's parameter
+    vector, from row rows[i] of the spin-independent parts (heads, N, D, Ê′ of :func:`spin_independent_parts`),
+    its spin invariants bases[i] (folded into the series if ``fold``, the aligned right-hand side), its end v_end[i]
+    and ``spin_tol``; checks[i] = (N, D, Ê′, event 6) at v₀ = Y0[i, 0] and the :func:`earlier_end` of its initial
+    state Y0[i] with the events at these addresses.  The head is copied element by element: an array slice
+    assignment would compile numba's shape-mismatch error path, ~4 s on a cold cache (benchmarks/bench_compile.py)."""
+    for i in range(P.shape[0]):
+        j = rows[i]
+        for k in range(P_NUM):
+            P[i, k] = heads[j, k]
+        P[i, P_VEND] = v_end[i]
+        P[i, P_SPINTOL] = spin_tol
+        checks[i, 0], checks[i, 1], checks[i, 2], checks[i, 3] = _store_series(N[j], D[j], Ep[j], bases[i], fold,
+                                                                                P[i], Y0[i, Y_V])
+        checks[i, 4] = earlier_end(c_addr, jit_addr, Y0[i], P[i])
 
 
 @functools.lru_cache(maxsize=64)
@@ -552,9 +569,9 @@ def _spin_independent_parts(key):
 
 
 def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor, phase_shift, omega_l):
-    """Everything :func:`make_parameters` builds that does not depend on the spins or v_end, for n binaries
-    that share the options and differ in X1, κ₁, κ₂ (arrays (n,), or floats for one binary): (heads
-    (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
+    """Everything :func:`make_parameters` (and :func:`start_rows`) builds that does not depend on the spins or
+    v_end, for n binaries that share the options and differ in X1, κ₁, κ₂ (arrays (n,), or floats for one
+    binary): (heads (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
     :func:`vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
     binary, against ~65 µs of Python floats for one, measured; 85 µs before the imports left the function and
     :func:`pnrotor.pn.series.shape_of` replaced np.shape).  The numbers are built with the binaries
@@ -612,13 +629,27 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
 @njit(cache=True)
 def _vdot_series_each(E_raw, F_raw, kmax, approx):
     """:func:`_vdot_series` of every binary i of E_raw[i], F_raw[i] → (N, D, Ê′), each (n, NK, NB, NL); the
-    same arithmetic as a call per binary (no fastmath: nothing is fused or reordered), ~5 µs faster each."""
+    same arithmetic as a call per binary (no fastmath: nothing is fused or reordered), ~5 µs faster each.  The
+    series are copied element by element (:func:`_copy`)."""
     N = np.empty_like(E_raw)
     D = np.empty_like(E_raw)
     Ep = np.empty_like(E_raw)
     for i in range(E_raw.shape[0]):
-        N[i], D[i], Ep[i] = _vdot_series(E_raw[i], F_raw[i], kmax, approx)
+        n, d, ep = _vdot_series(E_raw[i], F_raw[i], kmax, approx)
+        _copy(n, N[i])
+        _copy(d, D[i])
+        _copy(ep, Ep[i])
     return N, D, Ep
+
+
+@njit(cache=True)
+def _copy(src, dst):
+    """dst[...] = src for C-contiguous arrays of one shape, element by element: numba compiles an array assignment
+    with its shape-mismatch error message, whose string formatting took 5.4 s of a cold evolve_many
+    (benchmarks/bench_compile.py)."""
+    s, d = src.reshape(src.size), dst.reshape(dst.size)
+    for k in range(s.size):
+        d[k] = s[k]
 
 
 _UNIT_BASIS = np.array([1.0, 0, 0, 0, 0, 0, 0, 0, 0])
