@@ -53,7 +53,6 @@ from numba import njit
 
 from pnrotor import formulations as _form
 from pnrotor import quaternion as quat
-from pnrotor.ode import RHS_SIG
 
 # --------------------------------------------------------------------------------------------------
 # exactly reduced angles
@@ -210,26 +209,27 @@ def _omegas(ts, p, out):
 
 
 # --------------------------------------------------------------------------------------------------
-# right-hand sides: each derivative kernel of pnrotor.formulations composed with binary_omega
+# right-hand sides: each derivative kernel of pnrotor.formulations composed with binary_omega, compiled for
+# pnrotor.ode.RHS_SIG by the integrator when a run first needs it (not at import: ~1-1.5 s each on a cold cache)
 # --------------------------------------------------------------------------------------------------
 
 
-@njit(RHS_SIG, cache=True)
+@njit(cache=True)
 def _rhs_rotor(t, y, p, dydt):
     _form.rotor_derivative(binary_omega(t, p), y, p, dydt)
 
 
-@njit(RHS_SIG, cache=True)
+@njit(cache=True)
 def _rhs_generator(t, y, p, dydt):
     _form.generator_derivative(binary_omega(t, p), y, p, dydt)
 
 
-@njit(RHS_SIG, cache=True)
+@njit(cache=True)
 def _rhs_vectors(t, y, p, dydt):
     _form.vectors_derivative(binary_omega(t, p), y, p, dydt)
 
 
-@njit(RHS_SIG, cache=True)
+@njit(cache=True)
 def _rhs_damped_vectors(t, y, p, dydt):
     _form.damped_vectors_derivative(binary_omega(t, p), y, p, dydt)
 

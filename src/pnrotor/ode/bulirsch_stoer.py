@@ -2,8 +2,8 @@ r"""Gragg–Bulirsch–Stoer extrapolation integrator in numba.
 
 This module owns the extrapolation stepper (Gragg's modified midpoint rule + Aitken–Neville
 polynomial extrapolation), its order and step-size control, the driver loop (one ``@njit`` function
-with an explicit signature, cached across processes like the DOP853 core) and the Python entry
-point :func:`bulirsch_stoer`.
+compiled for one explicit signature on its first use, cached across processes like the DOP853 core) and the
+Python entry point :func:`bulirsch_stoer`.
 
 Algorithms (Hairer, Nørsett & Wanner, *Solving Ordinary Differential Equations I*, 2nd ed., Springer
 1993, Sec. II.9, and Hairer's ODEX code; W. B. Gragg, SIAM J. Numer. Anal. 2, 384 (1965);
@@ -86,7 +86,7 @@ _BS_SIG = types.Tuple((_A1, _A2, _I1, _A1))(
 )
 
 
-@njit(_BS_SIG, cache=True)
+@njit(cache=True)   # compiled for _BS_SIG by _entry_point when first needed, not at import (~9 s cold)
 def _bs_core(functions, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps, out_mode, kmax, k_init):
     """The Bulirsch–Stoer driver loop, its right-hand side and hook given by address (the first two of
     ``FUNCTIONS_LAYOUT``).  Returns (t_out, y_out, ivals, fvals); the output buffers are over-allocated, their
