@@ -192,3 +192,18 @@ def test_the_array_functions_compile_no_shape_mismatch_error_path(tmp_path):
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
                           env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path)))
     assert done.stdout.strip() == "True []", done.stdout + done.stderr[-2000:]
+
+
+@pytest.mark.parametrize("call", [
+    lambda: q.multiply(np.arange(1.0, 6.0), np.arange(1.0, 6.0)),   # 5 components
+    lambda: q.multiply(np.ones((2, 3)), np.ones((2, 3))),             # 3
+    lambda: q.normalize(np.ones(3)),
+    lambda: q.conjugate(np.ones((4, 5))),
+    lambda: q.inverse(np.ones(6)),
+    lambda: q.rotate([1.0, 0.0, 0.0, 0.0], np.ones(4)),              # a vector of 4
+])
+def test_the_array_functions_refuse_a_wrong_last_axis(call):
+    """A last axis that is not 4 (3 for rotate's vectors) raises, as numba's out[:] = result did, instead of
+    reading past the kernel's result (a review found a segfault for 10**6 components, and other numbers)."""
+    with pytest.raises(ValueError, match="4 components"):
+        call()

@@ -239,8 +239,11 @@ _Q2 = ["void(float64[:], float64[:], float64[:])"]
 
 @njit(cache=True)
 def _put(r, out):
-    """out[:] = r, element by element: an array slice assignment compiles numba's shape-mismatch error path with its
-    string formatting, ~2.7 s of a cold process's first gufunc (benchmarks/bench_compile.py)."""
+    """out[:] = r, element by element, or a ValueError if their lengths differ (a last axis that is not 4, or 3
+    for rotate's vectors): ``out[:] = r`` would compile numba's shape-mismatch error path with its string
+    formatting, 2.7 s of the first cold ``modes()`` (numba's compile events, README: cold start)."""
+    if r.shape[0] != out.shape[0]:
+        raise ValueError("quaternion arrays need 4 components on their last axis (rotate's vectors 3)")
     for k in range(out.shape[0]):
         out[k] = r[k]
 
