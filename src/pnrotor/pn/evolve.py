@@ -215,8 +215,9 @@ def _start(s):
 
 
 def build_rows(ss, parts, rows):
-    """What :func:`build_system` builds and checks, for binaries ``ss`` (Settings with the same options and spin
-    content) in one compiled call (:func:`pnrotor.pn.system.start_rows`: ``evolve_many``): (right-hand side,
+    """What :func:`build_system` builds and checks, for binaries ``ss`` (Settings with the same options and the
+    same right-hand side: all on the [v, Φ] system, ``use_aligned``, or none) in one compiled call
+    (:func:`pnrotor.pn.system.start_rows`: ``evolve_many``): (right-hand side,
     events, parameter vectors P (n, P_SIZE), initial states Y0 (n, size), spin invariants (n, 9), start checks
     (n, 5): ``_check_start(s, kmax, invariants, *checks)`` raises for binary i what build_system would), binary i
     from row rows[i] of the spin-independent ``parts`` (:func:`population_parts`).  Bitwise build_system's numbers

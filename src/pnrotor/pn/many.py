@@ -10,7 +10,7 @@ of those states, binary by binary:
   bitwise each binary's own numbers); then each binary's inputs are checked by the same stage as ``evolve``
   (:func:`~pnrotor.pn.settings.binary_settings`, the shared options checked once), and the parameter vectors,
   initial states and start checks that ``evolve`` builds one at a time (:func:`~pnrotor.pn.evolve.build_system`)
-  are built for all of them in one compiled call per spin content (:func:`~pnrotor.pn.evolve.build_rows`); a
+  are built for all of them in one compiled call per right-hand side (:func:`~pnrotor.pn.evolve.build_rows`); a
   binary whose inputs are invalid gets termination ``'invalid'`` and the error's text as its message, NaN in its
   state, and the others go on;
 * the integrations run in one ``numba.prange`` loop over the chunk's binaries (threads across cores), each
@@ -414,7 +414,7 @@ integrate_rotor, precession, max_steps
             stop = min(start + CHUNK, n)
             with np.errstate(all="ignore"):
                 parts = population_parts(reference, X1[start:stop], k1[start:stop], k2[start:stop])
-            kinds = {}    # spin content → [(binary, settings, refused targets, targets ahead, targets behind)]
+            kinds = {}    # use_aligned → [(binary, settings, refused targets, targets ahead, targets behind)]
             for i in range(start, stop):
                 f, fr = f_all[i], frl[i]
                 skip = _refused_targets(f, m1l[i], m2l[i], fr) if listed else {}
