@@ -3,8 +3,35 @@ and CI pass or fail reproducibly; ``explore`` draws new random examples each run
 failures: ``python3 -m pytest --hypothesis-profile=explore``.  (A random run found the degenerate binary
 of tests/test_integrate.py::test_generator_on_the_half_pi_sphere_converges.)"""
 
+import os
+import subprocess
+import sys
+
+import pytest
 from hypothesis import settings
 
 settings.register_profile("default", derandomize=True)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile("default")
+
+
+_COMPILED = """from numba.core import event
+compiled = []   # what numba compiles in this process, in order
+class _Compiled(event.Listener):
+    def on_start(self, ev): pass
+    def on_end(self, ev): compiled.append(str(ev.data["dispatcher"]))
+event.register("numba:compile", _Compiled())
+"""
+
+
+@pytest.fixture
+def cold_python(tmp_path):
+    """run(code, timeout) → the output of ``code`` run in a fresh Python with an empty numba cache (NUMBA_CACHE_DIR
+    in tmp_path), where the list ``compiled`` names what numba has compiled so far; a failing process fails the
+    test with its stderr."""
+    def run(code, timeout=600):
+        done = subprocess.run([sys.executable, "-c", _COMPILED + code], capture_output=True, text=True,
+                              timeout=timeout, env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba-cache")))
+        assert done.returncode == 0, done.stderr[-3000:]
+        return done.stdout
+    return run

@@ -129,19 +129,15 @@ def test_invalid_function():
         bulirsch_stoer(lambda t, y, p, d: None, 0.0, [1.0], 1.0, atol=1e-8)
 
 
-def test_importing_the_integrators_and_the_test_binary_compiles_nothing(tmp_path):
+def test_importing_the_integrators_and_the_test_binary_compiles_nothing(cold_python):
     """In a fresh process with an empty numba cache, importing pnrotor.integrate (which imports both integrators)
     and pnrotor.analytic compiles neither driver loop nor the binary's right-hand sides: decorated with their
     signatures, the Bulirsch-Stoer core and the four right-hand sides compiled at import (25.1 s against 3.5 s
     for the two imports on a cold cache, for every `pnrotor verify`, which uses one method and one formulation);
     they are compiled on first use."""
-    import os
-    import subprocess
-    import sys
-    code = ("import pnrotor.integrate, pnrotor.analytic as a\n"
-            "from pnrotor.ode.bulirsch_stoer import _bs_core\n"
-            "from pnrotor.ode.dop853 import _dop853_core\n"
-            "print(len(_bs_core.overloads), len(_dop853_core.overloads), sum(len(f.overloads) for f in a._RHS.values()))\n")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
-                          env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path)))
-    assert done.stdout.split() == ["0", "0", "0"], done.stdout + done.stderr[-2000:]
+    out = cold_python("import pnrotor.integrate, pnrotor.analytic as a\n"
+                      "from pnrotor.ode.bulirsch_stoer import _bs_core\n"
+                      "from pnrotor.ode.dop853 import _dop853_core\n"
+                      "print(len(_bs_core.overloads), len(_dop853_core.overloads),\n"
+                      "      sum(len(f.overloads) for f in a._RHS.values()))\n")
+    assert out.split() == ["0", "0", "0"], out

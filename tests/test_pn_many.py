@@ -134,30 +134,19 @@ def test_bad_shapes_and_shared_options_raise(call, match):
         call()
 
 
-def test_evolve_many_calls_the_one_compiled_core(tmp_path):
+def test_evolve_many_calls_the_one_compiled_core(cold_python):
     """In a fresh process with an empty numba cache (so that the parallel loop is compiled, 15-50 s), evolve_many
     leaves the DOP853 core with its one signature: written as constants in the loop, the output mode and
     dense flag made numba compile (and cache) a second core.  And none of its kernels compiles numba's
     shape-mismatch error path (an array assignment such as N[i] = series: 5.4 s of string formatting in
     system._vdot_series_each)."""
-    import os
-    import subprocess
-    import sys
-    code = ("from numba.core import event\n"
-            "names = []\n"
-            "class Names(event.Listener):\n"
-            "    def on_start(self, ev): pass\n"
-            "    def on_end(self, ev): names.append(str(ev.data['dispatcher']))\n"
-            "event.register('numba:compile', Names())\n"
-            "from pnrotor.pn import evolve_many\n"
-            "from pnrotor.ode.dop853 import _dop853_core, _CORE_SIG\n"
-            "evolve_many([30.0, 12.0], [10.0, 8.0], [0.6, 0, 0.2], [0, 0, 0.1], 20.0)\n"
-            "print(list(_dop853_core.overloads) == [tuple(_CORE_SIG.args)], len(names),\n"
-            "      [n for n in names if 'raise_with_shape' in n])\n")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=900,
-                          env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path)))
-    one_core, compiled, error_paths = done.stdout.strip().split(" ", 2)
-    assert one_core == "True" and int(compiled) > 10 and error_paths == "[]", done.stdout + done.stderr[-2000:]
+    out = cold_python("from pnrotor.pn import evolve_many\n"
+                      "from pnrotor.ode.dop853 import _dop853_core, _CORE_SIG\n"
+                      "evolve_many([30.0, 12.0], [10.0, 8.0], [0.6, 0, 0.2], [0, 0, 0.1], 20.0)\n"
+                      "print(list(_dop853_core.overloads) == [tuple(_CORE_SIG.args)], len(compiled),\n"
+                      "      [n for n in compiled if 'raise_with_shape' in n])\n", timeout=900)
+    one_core, n_compiled, error_paths = out.strip().split(" ", 2)
+    assert one_core == "True" and int(n_compiled) > 10 and error_paths == "[]", out
 
 
 def _assert_entry_same_as_single(pop, i, k, table, f_ref, f, options):

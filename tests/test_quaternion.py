@@ -166,32 +166,21 @@ def test_kernels_broadcast_over_arrays():
     assert q.log(R).shape == (6, 3) and q.exp(q.log(R)).shape == (6, 4)
 
 
-def test_the_array_functions_compile_no_shape_mismatch_error_path(tmp_path):
+def test_the_array_functions_compile_no_shape_mismatch_error_path(cold_python):
     """In a fresh process with an empty numba cache, the gufuncs compile without numba's shape-mismatch error path
     (an out[:] = result assignment compiled it, with its string formatting: 2.7 s of the first cold modes call),
     and still give the kernels' values."""
-    import os
-    import subprocess
-    import sys
-    code = ("from numba.core import event\n"
-            "import numpy as np\n"
-            "names = []\n"
-            "class Names(event.Listener):\n"
-            "    def on_start(self, ev): pass\n"
-            "    def on_end(self, ev): names.append(str(ev.data['dispatcher']))\n"
-            "event.register('numba:compile', Names())\n"
-            "from pnrotor import quaternion as q\n"
-            "R = np.array([[0.9, 0.1, -0.3, 0.2], [0.5, 0.5, 0.5, -0.5]])\n"
-            "same = [np.array_equal(q.multiply(R, R[::-1])[0], q.qmul(R[0], R[1])),\n"
-            "        np.array_equal(q.to_matrix(R)[1], q.qto_matrix(R[1])),\n"
-            "        np.array_equal(q.rotate(R, np.eye(3)[:2])[0], q.qrotate(R[0], np.eye(3)[0]))]\n"
-            "for f in (q.conjugate, q.inverse, q.normalize, q.log):\n"
-            "    f(R)\n"
-            "q.from_matrix(q.to_matrix(R)), q.exp(np.ones((2, 3)))\n"
-            "print(all(same), [n for n in names if 'raise_with_shape' in n])\n")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
-                          env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path)))
-    assert done.stdout.strip() == "True []", done.stdout + done.stderr[-2000:]
+    out = cold_python("import numpy as np\n"
+                      "from pnrotor import quaternion as q\n"
+                      "R = np.array([[0.9, 0.1, -0.3, 0.2], [0.5, 0.5, 0.5, -0.5]])\n"
+                      "same = [np.array_equal(q.multiply(R, R[::-1])[0], q.qmul(R[0], R[1])),\n"
+                      "        np.array_equal(q.to_matrix(R)[1], q.qto_matrix(R[1])),\n"
+                      "        np.array_equal(q.rotate(R, np.eye(3)[:2])[0], q.qrotate(R[0], np.eye(3)[0]))]\n"
+                      "for f in (q.conjugate, q.inverse, q.normalize, q.log):\n"
+                      "    f(R)\n"
+                      "q.from_matrix(q.to_matrix(R)), q.exp(np.ones((2, 3)))\n"
+                      "print(all(same), [n for n in compiled if 'raise_with_shape' in n])\n")
+    assert out.strip() == "True []", out
 
 
 @pytest.mark.parametrize("call", [
