@@ -141,3 +141,21 @@ def test_importing_the_integrators_and_the_test_binary_compiles_nothing(cold_pyt
                       "print(len(_bs_core.overloads), len(_dop853_core.overloads),\n"
                       "      sum(len(f.overloads) for f in a._RHS.values()))\n")
     assert out.split() == ["0", "0", "0"], out
+
+
+def test_the_first_bulirsch_stoer_run_waits_for_no_dop853_compile(cold_python):
+    """The CLI may compile the DOP853 core in another process (numba_cache.compile_aside); the first use of that core
+    waits for it, the first Bulirsch-Stoer run (another core) did too (a review)."""
+    out = cold_python("from pnrotor import numba_cache\n"
+                      "waited = []\n"
+                      "numba_cache.wait_for_aside = waited.append\n"
+                      "from numba import njit\n"
+                      "from pnrotor.ode import RHS_SIG, bulirsch_stoer, dop853\n"
+                      "@njit(RHS_SIG)\n"
+                      "def decay(t, y, p, dydt):\n"
+                      "    dydt[0] = -y[0]\n"
+                      "bulirsch_stoer(decay, 0.0, [1.0], 1.0, atol=1e-8)\n"
+                      "print(waited)\n"
+                      "dop853(decay, 0.0, [1.0], 1.0, atol=1e-8)\n"
+                      "print(waited)\n", timeout=900)
+    assert out.split("\n")[:2] == ["[]", "['core']"], out

@@ -241,7 +241,8 @@ _Q2 = ["void(float64[:], float64[:], float64[:])"]
 def _put(r, out):
     """out[:] = r, element by element, or a ValueError if their lengths differ (a last axis that is not 4, or 3
     for rotate's vectors): ``out[:] = r`` would compile numba's shape-mismatch error path with its string
-    formatting, 2.7 s of the first cold ``modes()`` (numba's compile events, README: cold start)."""
+    formatting, 2.7 s of the first cold ``modes()`` (numba's compile events; README, "Fresh machine").  Only the
+    output's length is checked: an input whose length does not set it (rotate's rotor, norm's quaternion) is not."""
     if r.shape[0] != out.shape[0]:
         raise ValueError("quaternion arrays need 4 components on their last axis (rotate's vectors 3)")
     for k in range(out.shape[0]):

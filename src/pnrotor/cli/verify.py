@@ -4,8 +4,8 @@ measure the frame error against its exact rotor (Boyle 2016, arXiv:1604.08139, S
 Runs `pnrotor.integrate_angular_velocity` on `pnrotor.analytic.PrecessingNutatingBinary` (the paper's
 parameters) over [0, T], evaluates δ(t) of eq:error_norm at every step against the exact rotor
 (eq:BinaryRotor), and prints the maximum δ with the integrator's work. The time to import pnrotor's
-integrator and compile its code (~1 s when numba's cache holds it, ~10 s when it must compile) and
-that of a first, short integration are printed apart from the timed run.
+integrator and that of a first, short integration (which compiles the integrator and the right-hand side it
+uses, or loads them from numba's cache) are printed apart from the timed run.
 The integrator is imported only when the command runs, so that the CLI starts quickly.
 With ``-o FILE.h5`` it writes the `FrameHistory`, whose ``inputs`` hold the binary's parameters
 (`PrecessingNutatingBinary.describe`; `PrecessingNutatingBinary.from_inputs` rebuilds it), so that
@@ -83,8 +83,8 @@ def run(args):
           f"   ({'≤' if delta[worst] <= args.max_error else '>'} {args.max_error:g})")
     print(f"  final δ          {delta[-1]:.3e} at t = {history.t[-1]:.10g}")
     print(f"  wall time        {history.wall_time:.4f} s integrating"
-          f"  (apart: {imported - start:.2f} s importing and compiling or loading the compiled code, "
-          f"{loaded - imported:.3f} s first call)")
+          f"  (apart: {imported - start:.2f} s importing, {loaded - imported:.3f} s first call, compiling or "
+          "loading the compiled code)")
     print(f"  evaluations      {history.nfev}")
     print(f"  steps            {history.nsteps} ({history.naccepted} accepted, {history.nrejected} rejected)")
     if history.formulation == "generator":

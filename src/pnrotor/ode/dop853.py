@@ -209,11 +209,11 @@ _ENTRY_POINTS = {}
 
 def _entry_point(core, sig):
     """The compiled entry point of a core for its one signature ``sig`` (or the dispatcher), compiled or loaded
-    from numba's cache on first use; a compilation of the core that the CLI started in another process
-    (:func:`pnrotor.numba_cache.compile_aside`) is awaited first, so that this one loads it."""
+    from numba's cache on first use; for the DOP853 core, a compilation of it that the CLI started in another
+    process (:func:`pnrotor.numba_cache.compile_aside`) is awaited first, so that this one loads it."""
     ep = _ENTRY_POINTS.get(core)
     if ep is None:
-        if not core.overloads:
+        if core is _dop853_core and not core.overloads:
             from pnrotor import numba_cache
 
             numba_cache.wait_for_aside("core")
@@ -1118,8 +1118,8 @@ def dop853(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None, max_ste
     ----------
     rhs : numba function
         ``rhs(t, y, p, dydt)`` writing dy/dt into ``dydt``; compile it with
-        ``@njit(RHS_SIG, cache=True)`` (a lazily compiled ``@njit`` function also works but is then
-        compiled in every process).
+        ``@njit(RHS_SIG, cache=True)``, or ``@njit(cache=True)``: it is then compiled for ``RHS_SIG`` on its
+        first use (and cached) instead of at import.
     t0, t_end : float
         Initial and final time; t_end < t0 integrates backward.
     y0 : array_like, shape (n,)

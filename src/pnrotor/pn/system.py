@@ -646,7 +646,7 @@ def _vdot_series_each(E_raw, F_raw, kmax, approx):
 def _copy(src, dst):
     """dst[...] = src for C-contiguous arrays of one shape, element by element: numba compiles an array assignment
     with its shape-mismatch error message, whose string formatting took 5.4-5.7 s of a cold evolve_many (numba's
-    compile events, README: populations)."""
+    compile events; README, "Populations")."""
     s, d = src.reshape(src.size), dst.reshape(dst.size)
     for k in range(s.size):
         d[k] = s[k]
