@@ -190,9 +190,32 @@ def test_the_array_functions_compile_no_shape_mismatch_error_path(cold_python):
     lambda: q.conjugate(np.ones((4, 5))),
     lambda: q.inverse(np.ones(6)),
     lambda: q.rotate([1.0, 0.0, 0.0, 0.0], np.ones(4)),              # a vector of 4
+    lambda: q.rotate(np.ones(3), np.ones(3)),                         # a rotor of 3
+    lambda: q.rotate(np.ones(5), np.ones(3)),
+    lambda: q.norm(np.ones(3)),
+    lambda: q.norm(np.ones((2, 5))),
+    lambda: q.exp(np.ones(4)),
+    lambda: q.log(np.ones(3)),
+    lambda: q.to_matrix(np.ones(5)),
+    lambda: q.from_matrix(np.eye(4)),
+    lambda: q.from_matrix(np.ones((3, 4))),                           # numpy refuses a non-square core
+    lambda: q.frame_error(np.ones(5), np.ones(5)),
 ])
 def test_the_array_functions_refuse_a_wrong_last_axis(call):
-    """A last axis that is not 4 (3 for rotate's vectors) raises, as numba's out[:] = result did, instead of
-    reading past the kernel's result (a review found a segfault for 10**6 components, and other numbers)."""
-    with pytest.raises(ValueError, match="4 components"):
+    """A quaternion axis that is not 4 (3 for vectors and matrices) raises, as numba's out[:] = result did for some,
+    instead of reading past the arrays (a review found a segfault for 10**6 components, and other numbers)."""
+    with pytest.raises(ValueError, match="4 components|mismatch in its core dimension"):
         call()
+
+
+def test_the_array_functions_take_empty_broadcast_and_strided_arrays():
+    """What the checks must let through: no quaternion at all, broadcasting rotors over vectors, strided inputs and
+    outputs."""
+    R = np.array([[0.9, 0.1, -0.3, 0.2], [0.5, 0.5, 0.5, -0.5], [0.0, 0.6, 0.0, 0.8]])
+    v = np.eye(3)
+    assert q.multiply(np.zeros((0, 4)), np.zeros((0, 4))).shape == (0, 4) and q.norm(np.zeros((0, 4))).shape == (0,)
+    np.testing.assert_array_equal(q.rotate(R[:, None, :], v)[1, 2], q.qrotate(R[1], v[2]))
+    out = np.empty((4, 3)).T
+    q.multiply(R[:, ::-1].copy()[:, ::-1], R[::-1], out=out)
+    np.testing.assert_array_equal(out[0], q.qmul(R[0], R[2]))
+    np.testing.assert_array_equal(q.norm(R[:, ::1]), [q.qnorm(r) for r in R])

@@ -238,13 +238,17 @@ _Q2 = ["void(float64[:], float64[:], float64[:])"]
 
 
 @njit(cache=True)
+def _check(x, n):
+    """A ValueError unless x, a gufunc's quaternion or vector, has n components (its kernel would read past it)."""
+    if x.shape[0] != n:
+        raise ValueError("quaternion arrays need 4 components on their last axis, vectors and matrices 3")
+
+
+@njit(cache=True)
 def _put(r, out):
-    """out[:] = r, element by element, or a ValueError if their lengths differ (a last axis that is not 4, or 3
-    for rotate's vectors): ``out[:] = r`` would compile numba's shape-mismatch error path with its string
-    formatting, 2.7 s of the first cold ``modes()`` (numba's compile events; README, "Fresh machine").  Only the
-    output's length is checked: an input whose length does not set it (rotate's rotor, norm's quaternion) is not."""
-    if r.shape[0] != out.shape[0]:
-        raise ValueError("quaternion arrays need 4 components on their last axis (rotate's vectors 3)")
+    """out[:] = r, element by element (the inputs checked, numpy checks the lengths of ``out``): ``out[:] = r`` would
+    compile numba's shape-mismatch error path with its string formatting, 2.7 s of the first cold ``modes()``
+    (numba's compile events; README, "Fresh machine")."""
     for k in range(out.shape[0]):
         out[k] = r[k]
 
@@ -270,30 +274,36 @@ def _gufunc(signatures, layout):
 @_gufunc(_Q2, "(n),(n)->(n)")
 def multiply(a, b, out):
     """Hamilton product a b of quaternion arrays (..., 4)."""
+    _check(a, 4)
+    _check(b, 4)
     _put(qmul(a, b), out)
 
 
 @_gufunc(["void(float64[:], float64[:])"], "(n)->(n)")
 def conjugate(q, out):
     """Conjugate of quaternion arrays (..., 4)."""
+    _check(q, 4)
     _put(qconj(q), out)
 
 
 @_gufunc(["void(float64[:], float64[:])"], "(n)->(n)")
 def inverse(q, out):
     """Inverse q̄/|q|² of quaternion arrays (..., 4)."""
+    _check(q, 4)
     _put(qinv(q), out)
 
 
 @_gufunc(["void(float64[:], float64[:])"], "(n)->()")
 def norm(q, out):
     """Euclidean norm of quaternion arrays (..., 4) → (...)."""
+    _check(q, 4)
     out[0] = qnorm(q)
 
 
 @_gufunc(["void(float64[:], float64[:])"], "(n)->(n)")
 def normalize(q, out):
     """q/|q| for quaternion arrays (..., 4)."""
+    _check(q, 4)
     _put(qnormalize(q), out)
 
 
@@ -301,11 +311,14 @@ def normalize(q, out):
 def rotate(R, v, out):
     """R v R⁻¹ for rotors (..., 4) of any norm in (1e-150, 1e150) (:func:`qrotate`) and vectors (..., 3)
     (eq:rotor-rotation)."""
+    _check(R, 4)
+    _check(v, 3)
     _put(qrotate(R, v), out)
 
 
 @_gufunc(["void(float64[:], float64[:], float64[:])"], "(m),(n)->(n)")
 def _exp(r, dummy, out):
+    _check(r, 3)
     _put(qexp(r), out)
 
 
@@ -316,6 +329,7 @@ def exp(r):
 
 @_gufunc(["void(float64[:], float64[:], float64[:])"], "(n),(m)->(m)")
 def _log(q, dummy, out):
+    _check(q, 4)
     _put(qlog(q), out)
 
 
@@ -327,6 +341,7 @@ def log(q):
 
 @_gufunc(["void(float64[:], float64[:,:], float64[:,:])"], "(n),(m,m)->(m,m)")
 def _to_matrix(R, dummy, out):
+    _check(R, 4)
     m = qto_matrix(R)
     for i in range(3):
         _put(m[i], out[i])
@@ -340,6 +355,8 @@ def to_matrix(R):
 
 @_gufunc(["void(float64[:,:], float64[:], float64[:])"], "(m,m),(n)->(n)")
 def _from_matrix(M, dummy, out):
+    _check(M, 3)
+    _check(M[0], 3)
     _put(qfrom_matrix(M), out)
 
 
@@ -393,4 +410,6 @@ def unflip(R):
 @_gufunc(["void(float64[:], float64[:], float64[:])"], "(n),(n)->()")
 def frame_error(Ra, Re, out):
     """δ of eq:error_norm between rotor arrays (..., 4) and (..., 4) → (...)."""
+    _check(Ra, 4)
+    _check(Re, 4)
     out[0] = qframe_error(Ra, Re)
