@@ -180,7 +180,8 @@ def build_system(s):
     """The :class:`System` of :class:`~pnrotor.pn.settings.Settings` ``s``; a ValueError if f_ref is at or
     past the end of the inspiral (the terminal events only fire on crossing zero, so none may start there)."""
     kmax = kmax_of(s)
-    rhs, events, bvals, y0 = _start(s)
+    rhs, events = _functions(s)
+    bvals, y0 = _start(s)
     p, at_v0 = _sys.make_parameters(
         s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
         kappa2=s.kappa2, v_end=s.v_max, spin_tol=_sys.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
@@ -195,23 +196,28 @@ def kmax_of(s):
     return kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order)
 
 
+def _functions(s):
+    """(right-hand side, events) of settings ``s``, by address: :func:`~pnrotor.pn.system.rhs_aligned` (state
+    [v, Φ]) for nonspinning and aligned spins, else :func:`~pnrotor.pn.system.rhs_precessing` (state
+    [v, χ₁, χ₂, R, Φ]; or :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with
+    ``precession='instantaneous'``)."""
+    if s.use_aligned:
+        rhs, events = _sys.rhs_aligned, _sys.events_aligned
+    else:
+        rhs = _sys.rhs_precessing_instantaneous if s.precession == "instantaneous" else _sys.rhs_precessing
+        events = _sys.events_precessing
+    # they cannot raise (error_model='numpy'), so they may go to the integrator by address
+    return by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG)
+
+
 def _start(s):
-    """(right-hand side and events by address, spin invariants at f_ref, initial state) of settings ``s``:
-    :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) for nonspinning and aligned spins, else
-    :func:`~pnrotor.pn.system.rhs_precessing` (state [v, χ₁, χ₂, R, Φ]; or
-    :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with ``precession='instantaneous'``)."""
+    """(spin invariants at f_ref, initial state of the right-hand side of :func:`_functions`) of settings ``s``."""
     (x1, y1, z1), (x2, y2, z2), (lx, ly, lz) = s.chi1.tolist(), s.chi2.tolist(), s.ell_hat.tolist()   # floats:
     bvals = basis_values(lx * x1 + ly * y1 + lz * z1, lx * x2 + ly * y2 + lz * z2,   # cheaper than np.dot
                          x1 * x2 + y1 * y2 + z1 * z2, x1 * x1 + y1 * y1 + z1 * z1, x2 * x2 + y2 * y2 + z2 * z2)
     if s.use_aligned:
-        rhs, events = _sys.rhs_aligned, _sys.events_aligned
-        y0 = np.array([s.v0, 0.0])
-    else:
-        rhs = _sys.rhs_precessing_instantaneous if s.precession == "instantaneous" else _sys.rhs_precessing
-        events = _sys.events_precessing
-        y0 = np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0])   # [v, χ₁, χ₂, R, Φ]
-    # they cannot raise (error_model='numpy'), so they may go to the integrator by address
-    return by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG), bvals, y0
+        return bvals, np.array([s.v0, 0.0])
+    return bvals, np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0])   # [v, χ₁, χ₂, R, Φ]
 
 
 def build_rows(ss, parts, rows):
@@ -222,9 +228,9 @@ def build_rows(ss, parts, rows):
     (n, 5): ``_check_start(s, kmax, invariants, *checks)`` raises for binary i what build_system would), binary i
     from row rows[i] of the spin-independent ``parts`` (:func:`population_parts`).  Bitwise build_system's numbers
     (tests/test_pn_coefficients.py)."""
+    rhs, events = _functions(ss[0])
     starts = [_start(s) for s in ss]
-    rhs, events = starts[0][:2]
-    bases, Y0 = np.array([x[2] for x in starts]), np.array([x[3] for x in starts])
+    bases, Y0 = np.array([x[0] for x in starts]), np.array([x[1] for x in starts])
     P, checks = np.zeros((len(ss), _sys.P_SIZE)), np.empty((len(ss), 5))
     _sys.start_rows(*parts, rows, bases, ss[0].use_aligned, np.array([s.v_max for s in ss]),
                     _sys.spin_tolerance(ss[0].atol, ss[0].rtol), *events.addresses, Y0, P, checks)
