@@ -345,7 +345,7 @@ def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
     (evolve.build_system): each row must be bitwise the other's (p, y0, the spin invariants, the start checks),
     whatever the order of the rows taken from the spin-independent parts."""
     from pnrotor.pn.evolve import _OPTIONS, build_rows, build_system, population_parts
-    from pnrotor.pn.settings import settings
+    from pnrotor.pn.settings import Options, population_settings, settings
     rng = np.random.default_rng(12)
     n = 40
     m1, m2 = rng.uniform(5.0, 40.0, n), rng.uniform(1.0, 20.0, n)
@@ -360,7 +360,11 @@ def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
     X1 = np.empty(n)
     X1[order] = [s.X1 for s in ss]
     parts = population_parts(ss[0], X1, np.full(n, 4.0), np.full(n, 2.0))
-    rhs, events, P, Y0, bases, checks = build_rows(ss, parts, order)
+    o = Options(*(getattr(ss[0], name) for name in Options._fields))
+    rows = population_settings(o, m1, m2, c1, c2, np.full(n, 20.0), np.full(n, np.nan), 200.0 + np.arange(n),
+                               np.tile(ell, (n, 1)), np.tile([0.0, 1.0, 0.0], (n, 1)), np.full(n, 4.0), np.full(n, 2.0))
+    assert rows.valid.all()
+    rhs, events, P, Y0, bases, checks = build_rows(o, rows, parts, order)
     assert Y0.shape[1] == (2 if spins == "aligned" else 12) and np.all(checks[:, :4] > 0.0)
     for i, s in enumerate(ss):
         one = build_system(s)

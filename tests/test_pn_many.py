@@ -1,5 +1,7 @@
 """pnrotor.pn.evolve_many against single evolve calls: bitwise the same end states, binary by binary."""
 
+import math
+
 import astropy.units as u
 import numba
 import numpy as np
@@ -317,3 +319,74 @@ def test_an_invalid_binarys_refused_targets_get_the_message_evolve_gives_first()
     assert pop.message[0, 0].startswith("frequencies[0] must be a finite positive")
     assert pop.message[0, 2].startswith("|chi1| = 1.5") and pop.message[1, 1].startswith("f_ref = 1000.0 Hz is past")
     assert pop.message[1, 2].startswith("frequencies[2] = 10000.0 Hz gives v")
+
+
+def _settings_table():
+    """Binaries for population_settings: random valid ones (precessing, aligned, nonspinning, tilted frames) and
+    rows that fail one check of binary_settings each or sit just inside its bound."""
+    rng = np.random.default_rng(7)
+    n = 24
+    rows = []
+    for i in range(n):
+        c1, c2 = rng.uniform(-0.6, 0.6, 3), rng.uniform(-0.6, 0.6, 3)
+        ell, nh = np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])
+        if i % 3 == 1:
+            ell, nh = np.array([0.6, 0.0, -0.8]), np.array([-0.8, 0.0, -0.6])
+        if i % 4 == 0:
+            c1, c2 = c1[2] * ell, c2[2] * ell
+        if i % 4 == 1:
+            c1, c2 = -0.0 * c1, 0.0 * c2          # nonspinning, signed zeros
+        rows.append([rng.uniform(5, 40), rng.uniform(1, 20), c1, c2, 20.0, (np.nan, 12.0)[i % 2],
+                     (np.nan, 100.0)[i % 3 == 0], ell, nh, 1.0, rng.uniform(0, 5)])
+    z, x = np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])
+    base = [30.0, 10.0, np.array([0.1, 0.2, 0.3]), np.array([0.0, -0.4, 0.1]), 20.0, np.nan, np.nan, z, x, 1.0, 1.0]
+    for k, value in [(0, -1.0), (0, np.nan), (1, np.inf), (0, 0.0), (0, 1e3), (0, 1e3 * (1.0 + 1e-9)),
+                     (2, np.array([1.0, 0.0, 0.0])), (2, np.array([1.0, 1e-7, 0.0])), (3, np.array([0.0, np.nan, 0.0])),
+                     (7, np.array([0.0, 0.0, 1.0 + 2e-8])), (7, np.array([0.0, 0.0, 1.0 + 5e-9])),
+                     (8, np.array([1.0, 0.0, 2e-8])), (8, np.array([1.0, 0.0, 5e-9])), (8, np.array([0.0, 0.0, 1.0])),
+                     (9, -1.0), (9, 0.0), (10, np.nan), (10, np.inf), (4, 1e-6), (4, 1e5), (4, -20.0), (4, np.inf),
+                     (5, 20.0), (5, 25.0), (5, 1e-6), (5, 0.0), (5, -5.0), (5, np.inf), (5, 10.0),
+                     (6, 20.0), (6, 15.0), (6, 1e5), (6, 5000.0), (6, np.inf), (6, 0.0), (6, 300.0),
+                     (2, np.array([1.0 + 1e-13, 0.0, 0.0])), (7, np.array([-0.0, 0.0, 1.0])),
+                     (2, np.array([1e-15, 0.0, 0.3])), (2, np.array([1e-13, 0.0, 0.3]))]:
+        row = list(base)
+        row[k] = value
+        if k == 0 and value >= 1e3:
+            row[1] = 1e-3              # m1/m2 = 1e6, the bound (allowed), and just beyond it
+        if k == 7 and value[0] == 0.0:
+            row[8] = np.array([1.0, 0.0, -0.0])   # signed zeros: R0 (1, -0, 0, 0), not the first row's (1, 0, 0, 0)
+        if k == 2 and value[0] < 1e-12:
+            row[3] = np.array([0.0, 0.0, -0.2])   # in-plane parts of 1e-15 (aligned) and 1e-13 (precessing)
+        rows.append(row)
+    rows.append([30.0, 10.0, 0.0 * z, 0.0 * z, 20.0, np.nan, np.nan, np.array([-0.6, 0.0, 0.8]),
+                 np.array([0.8, 0.0, 0.6]), 1.0, 1.0])
+    return [np.array([r[k] for r in rows], dtype=np.float64) for k in range(11)]
+
+
+@pytest.mark.parametrize("integrate_rotor", [False, True])
+def test_population_settings_are_binary_settings_row_by_row(integrate_rotor):
+    """evolve_many checks and converts a whole population at once (settings.population_settings): a row it calls
+    valid must hold bitwise binary_settings' numbers (signed zeros too), and binary_settings must refuse every row
+    it does not call valid (each edge row fails one check, or sits just inside a bound)."""
+    from pnrotor.pn.settings import binary_settings, options, population_settings
+    o = options("T4", 3.5, None, None, 1e-12, 0.0, "final", "coprecessing", None, integrate_rotor, "averaged",
+                1000)
+    table = _settings_table()
+    b = population_settings(o, *table)
+    n_valid = 0
+    for i in range(table[0].size):
+        m1, m2, c1, c2, f_ref, f_min, f_max, ell, nh, k1, k2 = (x[i].tolist() for x in table)
+        try:
+            s = binary_settings(o, m1, m2, c1, c2, f_ref, None if math.isnan(f_min) else f_min,
+                                None if math.isnan(f_max) else f_max, ell, nh, k1, k2)
+        except ValueError:
+            assert not b.valid[i], i
+            continue
+        assert b.valid[i], i
+        n_valid += 1
+        assert b.aligned[i] == s.use_aligned
+        for name in ("M_sec", "X1", "nu", "v0", "v_max", "chi1", "chi2", "ell_hat", "R0"):
+            assert np.asarray(getattr(b, name)[i]).tobytes() == np.asarray(getattr(s, name)).tobytes(), (i, name)
+        assert (np.isnan(b.v_min[i]) and s.v_min is None) or b.v_min[i].tobytes() == np.float64(s.v_min).tobytes()
+    assert 24 < n_valid < table[0].size - 20
+    assert {False, True} <= set(b.aligned[b.valid]) or integrate_rotor

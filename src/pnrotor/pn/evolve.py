@@ -180,7 +180,7 @@ def build_system(s):
     """The :class:`System` of :class:`~pnrotor.pn.settings.Settings` ``s``; a ValueError if f_ref is at or
     past the end of the inspiral (the terminal events only fire on crossing zero, so none may start there)."""
     kmax = kmax_of(s)
-    rhs, events = _functions(s)
+    rhs, events = _functions(s.use_aligned, s.precession)
     bvals, y0 = _start(s)
     p, at_v0 = _sys.make_parameters(
         s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
@@ -196,44 +196,52 @@ def kmax_of(s):
     return kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order)
 
 
-def _functions(s):
-    """(right-hand side, events) of settings ``s``, by address: :func:`~pnrotor.pn.system.rhs_aligned` (state
-    [v, Φ]) for nonspinning and aligned spins, else :func:`~pnrotor.pn.system.rhs_precessing` (state
-    [v, χ₁, χ₂, R, Φ]; or :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with
+def _functions(use_aligned, precession):
+    """(right-hand side, events) of a run, by address: :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) where
+    it ``use_aligned`` (Settings), for nonspinning and aligned spins, else :func:`~pnrotor.pn.system.rhs_precessing`
+    (state [v, χ₁, χ₂, R, Φ]; or :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with
     ``precession='instantaneous'``)."""
-    if s.use_aligned:
+    if use_aligned:
         rhs, events = _sys.rhs_aligned, _sys.events_aligned
     else:
-        rhs = _sys.rhs_precessing_instantaneous if s.precession == "instantaneous" else _sys.rhs_precessing
+        rhs = _sys.rhs_precessing_instantaneous if precession == "instantaneous" else _sys.rhs_precessing
         events = _sys.events_precessing
     # they cannot raise (error_model='numpy'), so they may go to the integrator by address
     return by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG)
 
 
+def _invariants(x1, y1, z1, x2, y2, z2, lx, ly, lz):
+    """The spin invariants (:func:`~pnrotor.pn.series.basis_values`) of χ₁, χ₂ and ℓ̂ by components: floats (one
+    binary, cheaper than np.dot), or arrays (n,) → (9, n), elementwise the same numbers."""
+    return basis_values(lx * x1 + ly * y1 + lz * z1, lx * x2 + ly * y2 + lz * z2, x1 * x2 + y1 * y2 + z1 * z2,
+                        x1 * x1 + y1 * y1 + z1 * z1, x2 * x2 + y2 * y2 + z2 * z2)
+
+
 def _start(s):
     """(spin invariants at f_ref, initial state of the right-hand side of :func:`_functions`) of settings ``s``."""
-    (x1, y1, z1), (x2, y2, z2), (lx, ly, lz) = s.chi1.tolist(), s.chi2.tolist(), s.ell_hat.tolist()   # floats:
-    bvals = basis_values(lx * x1 + ly * y1 + lz * z1, lx * x2 + ly * y2 + lz * z2,   # cheaper than np.dot
-                         x1 * x2 + y1 * y2 + z1 * z2, x1 * x1 + y1 * y1 + z1 * z1, x2 * x2 + y2 * y2 + z2 * z2)
+    (x1, y1, z1), (x2, y2, z2), (lx, ly, lz) = s.chi1.tolist(), s.chi2.tolist(), s.ell_hat.tolist()   # floats
+    bvals = _invariants(x1, y1, z1, x2, y2, z2, lx, ly, lz)
     if s.use_aligned:
         return bvals, np.array([s.v0, 0.0])
     return bvals, np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0])   # [v, χ₁, χ₂, R, Φ]
 
 
-def build_rows(ss, parts, rows):
-    """What :func:`build_system` builds and checks, for binaries ``ss`` (Settings with the same options and the
-    same right-hand side: all on the [v, Φ] system, ``use_aligned``, or none) in one compiled call
-    (:func:`pnrotor.pn.system.start_rows`: ``evolve_many``): (right-hand side,
-    events, parameter vectors P (n, P_SIZE), initial states Y0 (n, size), spin invariants (n, 9), start checks
-    (n, 5): ``_check_start(s, kmax, invariants, *checks)`` raises for binary i what build_system would), binary i
-    from row rows[i] of the spin-independent ``parts`` (:func:`population_parts`).  Bitwise build_system's numbers
-    (tests/test_pn_coefficients.py)."""
-    rhs, events = _functions(ss[0])
-    starts = [_start(s) for s in ss]
-    bases, Y0 = np.array([x[0] for x in starts]), np.array([x[1] for x in starts])
-    P, checks = np.zeros((len(ss), _sys.P_SIZE)), np.empty((len(ss), 5))
-    _sys.start_rows(*parts, rows, bases, ss[0].use_aligned, np.array([s.v_max for s in ss]),
-                    _sys.spin_tolerance(ss[0].atol, ss[0].rtol), *events.addresses, Y0, P, checks)
+def build_rows(o, b, parts, rows):
+    """What :func:`build_system` builds and checks, for binaries that share :class:`~pnrotor.pn.settings.Options`
+    ``o`` and their right-hand side (all on the [v, Φ] system, ``use_aligned``, or none), in one compiled call
+    (:func:`pnrotor.pn.system.start_rows`: ``evolve_many``): b holds their rows of
+    :class:`~pnrotor.pn.settings.Binaries`, binary i from row rows[i] of the spin-independent ``parts``
+    (:func:`population_parts`) → (right-hand side, events, parameter vectors P (n, P_SIZE), initial states Y0
+    (n, size), spin invariants (n, 9), start checks (n, 5): ``_check_start(s, kmax, invariants, *checks)`` raises
+    for binary i what build_system would).  Bitwise build_system's numbers (tests/test_pn_coefficients.py)."""
+    aligned = bool(b.aligned[0])
+    rhs, events = _functions(aligned, o.precession)
+    bases = np.ascontiguousarray(_invariants(*b.chi1.T, *b.chi2.T, *b.ell_hat.T).T)
+    zeros = np.zeros((b.v0.size, 1))
+    Y0 = np.concatenate([b.v0[:, None], zeros] if aligned else [b.v0[:, None], b.chi1, b.chi2, b.R0, zeros], axis=1)
+    P, checks = np.zeros((b.v0.size, _sys.P_SIZE)), np.empty((b.v0.size, 5))
+    _sys.start_rows(*parts, rows, bases, aligned, b.v_max, _sys.spin_tolerance(o.atol, o.rtol), *events.addresses,
+                    Y0, P, checks)
     return rhs, events, P, Y0, bases, checks
 
 
@@ -252,10 +260,7 @@ def population_parts(s, X1, kappa1, kappa2):
 def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
     """A ValueError naming f_ref and its bound if N, D, Ê′ or event 6 at v₀ say the inspiral has ended, or if one
     of them does at a lower v (``ended``, :func:`pnrotor.pn.system.earlier_end`)."""
-    why = ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
-           else "dv/dt <= 0" if not n0 * d0 > 0.0
-           else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS
-           else "the orbital frequency no longer accelerates (d2(omega)/dt2 <= 0)" if not peak0 > 0.0 else None)
+    why = _ended_at(n0, d0, e0, peak0)
     if why or ended:   # the bound: the first end on inspiral_end's grid or on the start check's, whichever is lower
         v_end = min(_sys.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2), ended or 1.0)
         why = f"{why} at v = {s.v0:.4g}" if why else \
@@ -263,6 +268,14 @@ def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
         raise ValueError(f"f_ref = {s.f_ref} Hz is past the end of the {s.approximant} inspiral: {why}; for these "
                          f"masses and spins f_ref must be below {_ini.frequency_from_v(v_end, s.M_sec):.6g} Hz "
                          f"(v = {v_end:.6g})")
+
+
+def _ended_at(n0, d0, e0, peak0):
+    """Why the inspiral has ended at v₀ by N, D, Ê′ and event 6 there, or None (:func:`_check_start`)."""
+    return ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
+            else "dv/dt <= 0" if not n0 * d0 > 0.0
+            else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS
+            else "the orbital frequency no longer accelerates (d2(omega)/dt2 <= 0)" if not peak0 > 0.0 else None)
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -275,18 +288,25 @@ _BACKWARD_EVENTS = np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0])
 backward; the denominator of v̇ and event 6 falling; the others on any crossing."""
 
 
-def half(s, p, forward):
-    """(parameter vector, t_end, event directions, name of the end-frequency termination) of the forward half (to
-    f_max, or to the end of the inspiral within 4τ_N(v₀) + 10⁴ M) or the backward half (to f_min, within twice
-    the Newtonian time from f_min to f_ref + 10⁴ M) of the run with parameter vector ``p`` (a copy with
-    v_end = v_min for the backward half)."""
-    tau0 = _ini.newtonian_time_to_coalescence(s.v0, s.nu)
+def half(v0, nu, v_min, p, forward):
+    """(parameter vector, t_end, event directions) of the forward half (to f_max, or to the end of the inspiral
+    within 4τ_N(v₀) + 10⁴ M) or the backward half (to f_min, within twice the Newtonian time from f_min to f_ref +
+    10⁴ M) of the run from v0 with symmetric mass ratio nu and parameter vector ``p`` (a copy with v_end = v_min for
+    the backward half).  Floats and one p (``evolve``), or arrays (n,) and P (n, P_SIZE) of n runs
+    (``evolve_many``), elementwise the same numbers."""
+    tau0 = _newtonian_time(v0, nu)
     if forward:
-        return p, 4.0 * tau0 + 1.0e4, _FORWARD_EVENTS, "f_max" if s.f_max is not None else "v_max"
+        return p, 4.0 * tau0 + 1.0e4, _FORWARD_EVENTS
     p = p.copy()
-    p[_sys.P_VEND] = s.v_min
-    t_end = -(2.0 * (_ini.newtonian_time_to_coalescence(s.v_min, s.nu) - tau0) + 1.0e4)
-    return p, t_end, _BACKWARD_EVENTS, "f_min"
+    p[..., _sys.P_VEND] = v_min
+    return p, -(2.0 * (_newtonian_time(v_min, nu) - tau0) + 1.0e4), _BACKWARD_EVENTS
+
+
+def _newtonian_time(v, nu):
+    """τ_N(v) (:func:`pnrotor.pn.initial.newtonian_time_to_coalescence`) of floats, or elementwise of arrays."""
+    if isinstance(v, np.ndarray):
+        return _ini.elementwise(_ini.newtonian_time_to_coalescence, v, nu)
+    return _ini.newtonian_time_to_coalescence(v, nu)
 
 
 _NO_T_EVAL = np.empty(0)
@@ -297,7 +317,8 @@ def integrate_half(s, system, forward, t_eval, dense):
     is None (every step) or 'final'.  What :func:`pnrotor.ode.dop853` would check is guaranteed by
     :func:`~pnrotor.pn.settings.settings` and :func:`build_system`, so its core is called directly
     (``pnrotor.ode.dop853._integrate``)."""
-    p, t_end, directions, end = half(s, system.p, forward)
+    p, t_end, directions = half(s.v0, s.nu, s.v_min, system.p, forward)
+    end = "f_min" if not forward else "f_max" if s.f_max is not None else "v_max"
     res = _integrate(system.rhs, _default_hook("after_step"), system.events, 0.0, system.y0, t_end, p,
                      *_tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
                      _NO_T_EVAL, OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, _sys.N_EVENTS, directions,

@@ -114,6 +114,12 @@ def newtonian_time_to_coalescence(v, nu):
     return 5.0 / (256.0 * nu * v ** 8)
 
 
+def elementwise(f, *arrays):
+    """f of Python floats applied to the elements of equal-length 1-d arrays → float64 array: for a population, the
+    numbers of one binary's call bitwise (numpy's ``**`` is not libm's pow on every CPU: SIMD versions on some)."""
+    return np.array([f(*x) for x in zip(*(a.tolist() for a in arrays))], dtype=np.float64)
+
+
 def _vec3(a, name):
     """Three finite floats from a 3-vector (plain Python floats: cheaper than numpy for three numbers)."""
     try:

@@ -5,14 +5,16 @@ frequency (forward or backward from f_ref), the state at a list of frequencies, 
 the inspiral.  :func:`evolve_many` gives exactly what :func:`pnrotor.pn.evolve.evolve` would give for each
 of those states, binary by binary:
 
-* per chunk of :data:`CHUNK` binaries, the part of the parameter vectors that depends on the masses and κᵢ
-  alone is built for all of them in one pass of numpy (:func:`pnrotor.pn.system.spin_independent_parts`,
-  bitwise each binary's own numbers); then each binary's inputs are checked by the same stage as ``evolve``
-  (:func:`~pnrotor.pn.settings.binary_settings`, the shared options checked once), and the parameter vectors,
+* per chunk of :data:`CHUNK` binaries, the inputs are checked and converted as ``evolve``'s first stage would
+  (the shared options once), for all binaries in one pass of numpy (:func:`~pnrotor.pn.settings.population_settings`,
+  bitwise each binary's :func:`~pnrotor.pn.settings.binary_settings`; a binary it does not pass goes to
+  binary_settings, which words the refusal); the part of the parameter vectors that depends on the masses and κᵢ
+  alone is built in one pass too (:func:`pnrotor.pn.system.spin_independent_parts`), and the parameter vectors,
   initial states and start checks that ``evolve`` builds one at a time (:func:`~pnrotor.pn.evolve.build_system`)
-  are built for all of them in one compiled call per right-hand side (:func:`~pnrotor.pn.evolve.build_rows`); a
-  binary whose inputs are invalid gets termination ``'invalid'`` and the error's text as its message, NaN in its
-  state, and the others go on;
+  in one compiled call per right-hand side (:func:`~pnrotor.pn.evolve.build_rows`); a binary whose inputs are
+  invalid gets termination ``'invalid'`` and the error's text as its message, NaN in its state, and the others go
+  on.  Python is left per binary only for a list of frequencies (each binary's targets sorted on either side) and
+  for refusals;
 * the integrations run in one ``numba.prange`` loop over the chunk's binaries (threads across cores), each
   a call of the DOP853 core with output of the final state only (and of the dense output where a list has
   nearer targets), grouped by right-hand side (the [v, Φ] system of nonspinning and aligned binaries, the
@@ -48,10 +50,10 @@ from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NST
                           no_after_step)
 from ..ode.result import contd8
 from . import initial as _ini
-from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _tolerances, build_rows, half, kmax_of,
-                     population_parts, termination)
+from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _ended_at, _tolerances, build_rows, half,
+                     kmax_of, population_parts, termination)
 from .sampling import _fill_history, output_mode
-from .settings import binary_settings, options, target_v
+from .settings import Binaries, binary_settings, options, population_settings, target_v
 from .system import EV_V_END, N_EVENTS, P_VEND
 
 __all__ = ["evolve_many", "Population"]
@@ -252,36 +254,23 @@ def _target_table(f_end, frequencies, n):
     return np.ascontiguousarray(f), True
 
 
-def _integrate_groups(groups, atol, rtol, max_steps, out, counts):
-    """Each group of halves {(rhs, events, output mode, state size): [(row of the farthest end, y0, p, t_end,
-    event directions, settings, [(v, row) of the nearer targets])]} integrated by :func:`_integrate_all` into
-    the rows of ``out`` and ``counts`` → the seconds its compiled loops took.  The binaries go to the threads
-    one at a time as each is free (numba's chunk size 1): an even split left one thread idle at the end, ~4%
-    of the loop (measured, 4,000 binaries on two threads)."""
-    after_step = by_address(no_after_step, AFTER_STEP_SIG)
-    seconds = 0.0
-    for (rhs, events, mode, size), members in groups.items():
-        atol_a, rtol_a = _tolerances(size, atol, rtol)
-        rows, y0, p, t_end, directions, ss, nearer = zip(*members)
-        width = max(len(x) for x in nearer)
-        near_r = np.full((len(members), width), -1, dtype=np.int64)
-        near_vk = np.full((len(members), width), np.nan)
-        for j, x in enumerate(nearer):
-            for q, (vk, r) in enumerate(x):
-                near_vk[j, q], near_r[j, q] = vk, r
-        args = (_function_addresses(rhs, after_step, events), np.array(y0), np.array(p), np.array(t_end),
-                np.array(directions),
-                atol_a, rtol_a, max_steps, *_CONTROLLER, mode, np.array([s.R0 for s in ss]),
-                np.array([s.ell_hat for s in ss]), np.array([s.chi1 for s in ss]), np.array([s.chi2 for s in ss]),
-                np.array(rows, dtype=np.int64), near_vk, near_r, out.t, out.v, out.Phi, out.chi1, out.chi2, out.R,
-                out.ell_hat, counts, np.empty(0), OUT_FINAL)
-        start = time.perf_counter()
-        if not _integrate_all.overloads:   # it is compiled with the DOP853 core inside: load the core that the
-            numba_cache.wait_for_aside("core")   # CLI may be compiling in another process, not compile it twice
-        with numba.parallel_chunksize(1):
-            _integrate_all(*args)
-        seconds += time.perf_counter() - start
-    return seconds
+def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, directions, R0, ell, chi1, chi2, rows,
+                     near_v, near_r, out, counts):
+    """Halves k = 0 … n−1 of one right-hand side (initial states Y0[k], parameter vectors P[k], t_end[k], event
+    directions[k], the run's R₀, ℓ̂, χ₁, χ₂ at f_ref, output row rows[k], nearer targets near_v[k] in rows near_r[k])
+    integrated by :func:`_integrate_all` into the rows of ``out`` and ``counts`` → the seconds its compiled loops
+    took.  The halves go to the threads one at a time as each is free (numba's chunk size 1): an even split left
+    one thread idle at the end, ~4% of the loop (measured, 4,000 binaries on two threads)."""
+    atol_a, rtol_a = _tolerances(Y0.shape[1], atol, rtol)
+    args = (_function_addresses(rhs, by_address(no_after_step, AFTER_STEP_SIG), events), Y0, P, t_end, directions,
+            atol_a, rtol_a, max_steps, *_CONTROLLER, mode, R0, ell, chi1, chi2, rows, near_v, near_r, out.t, out.v,
+            out.Phi, out.chi1, out.chi2, out.R, out.ell_hat, counts, np.empty(0), OUT_FINAL)
+    start = time.perf_counter()
+    if not _integrate_all.overloads:   # it is compiled with the DOP853 core inside: load the core that the
+        numba_cache.wait_for_aside("core")   # CLI may be compiling in another process, not compile it twice
+    with numba.parallel_chunksize(1):
+        _integrate_all(*args)
+    return time.perf_counter() - start
 
 
 @contextmanager
@@ -391,19 +380,27 @@ integrate_rotor, precession, max_steps
                      termination=np.full(nr, "invalid", dtype=object), message=np.full(nr, "", dtype=object),
                      nsteps=np.zeros(nr, dtype=np.int64), nfev=np.zeros(nr, dtype=np.int64),
                      inputs={k: v for k, v in shared.items() if k != "sampling"})
-    ends, M_sec, counts = [None] * nr, np.full(nr, np.nan), np.zeros((nr, 4), dtype=np.int64)
+    ends, M_sec = np.full(nr, None, dtype=object), np.full(nr, np.nan)
+    counts = np.zeros((nr, 4), dtype=np.int64)
     with np.errstate(all="ignore"):   # an invalid binary's row is never used: settings refuses it first
         X1 = m1a / (m1a + m2a)
     # per binary in Python floats and lists: numpy on a few numbers costs ~0.5-1 µs per operation
     f_all, m1l, m2l, frl, k1l, k2l, c1l, c2l, elll, nhl = (x.tolist() for x in (targets, m1a, m2a, fref, k1, k2, c1,
                                                                                 c2, ell, nh))
     kmax = kmax_of(reference)
+    mode = {aligned: output_mode(aligned, reference.rotor) for aligned in (True, False)}
+    skips, aheads, behinds = [{}] * n, [[0]] * n, [[]] * n   # per binary with a list: refused targets, the others
 
-    def refuse(i, skip, e):
-        """Binary i invalid (the ValueError e): its message on its rows, or a refused target's (``skip``) where that
-        check comes first in evolve's order."""
+    def settings_of(i, f_min, f_max):
+        """binary_settings of binary i (a ValueError if it is invalid) with f_min and f_max (NaN: none)."""
+        return binary_settings(opts, m1l[i], m2l[i], c1l[i], c2l[i], frl[i], None if f_min != f_min else f_min,
+                               None if f_max != f_max else f_max, elll[i], nhl[i], k1l[i], k2l[i])
+
+    def refuse(i, e):
+        """Binary i invalid (the ValueError e): its message on its rows, or a refused target's where that check
+        comes first in evolve's order."""
         out.message[i * K:(i + 1) * K] = str(e)
-        for k, why in skip.items():
+        for k, why in skips[i].items():
             if _first_error(opts, m1l[i], m2l[i], c1l[i], c2l[i], frl[i], f_all[i][k], elll[i], nhl[i], k1l[i],
                             k2l[i]) not in (None, str(e)):
                 out.message[i * K + k] = why
@@ -412,52 +409,91 @@ integrate_rotor, precession, max_steps
     with _collector_paused():
         for start in range(0, n, CHUNK):
             stop = min(start + CHUNK, n)
+            if listed:   # f_min, f_max: the farthest kept target on each side
+                f_lo, f_hi = np.full(stop - start, np.nan), np.full(stop - start, np.nan)
+                for i in range(start, stop):
+                    f, fr = f_all[i], frl[i]
+                    skips[i] = _refused_targets(f, m1l[i], m2l[i], fr)
+                    kept = [k for k in range(K) if k not in skips[i]]
+                    behinds[i] = [k for k in kept if f[k] < fr]
+                    aheads[i] = [k for k in kept if not f[k] < fr]
+                    f_ahead = [f[k] for k in aheads[i] if f[k] == f[k]]
+                    if behinds[i]:
+                        f_lo[i - start] = min(f[k] for k in behinds[i])
+                    if f_ahead:
+                        f_hi[i - start] = max(f_ahead)
+            else:        # one target: behind f_ref backward, else (or NaN: to the end) forward
+                f = targets[start:stop, 0]
+                back = f < fref[start:stop]
+                f_lo, f_hi = np.where(back, f, np.nan), np.where(back, np.nan, f)
+            b = population_settings(opts, m1a[start:stop], m2a[start:stop], c1[start:stop], c2[start:stop],
+                                    fref[start:stop], f_lo, f_hi, ell[start:stop], nh[start:stop], k1[start:stop],
+                                    k2[start:stop])
+            for j in np.flatnonzero(~b.valid).tolist():   # binary_settings decides and words the refusals
+                try:
+                    b.put(j, settings_of(start + j, f_lo[j].item(), f_hi[j].item()))
+                except ValueError as e:
+                    refuse(start + j, e)
             with np.errstate(all="ignore"):
                 parts = population_parts(reference, X1[start:stop], k1[start:stop], k2[start:stop])
-            kinds = {}    # use_aligned → [(binary, settings, refused targets, targets ahead, targets behind)]
-            for i in range(start, stop):
-                f, fr = f_all[i], frl[i]
-                skip = _refused_targets(f, m1l[i], m2l[i], fr) if listed else {}
-                kept = [k for k in range(K) if k not in skip]
-                behind = [k for k in kept if f[k] < fr]
-                ahead = [k for k in kept if not f[k] < fr]    # NaN (f_end: to the end of the inspiral) goes forward
-                f_ahead = [f[k] for k in ahead if f[k] == f[k]]
-                try:
-                    s = binary_settings(opts, m1l[i], m2l[i], c1l[i], c2l[i], fr,
-                                        min(f[k] for k in behind) if behind else None,
-                                        max(f_ahead) if f_ahead else None, elll[i], nhl[i], k1l[i], k2l[i])
-                except ValueError as e:
-                    refuse(i, skip, e)
+            for aligned in (True, False):
+                g = np.flatnonzero(b.valid & (b.aligned == aligned))   # rows of the chunk with this right-hand side
+                if not g.size:
                     continue
-                kinds.setdefault(s.use_aligned, []).append((i, s, skip, ahead, behind))
-            groups = {}
-            for members in kinds.values():
-                rhs, events, P, Y0, bases, checks = build_rows(
-                    [m[1] for m in members], parts, np.array([m[0] - start for m in members], dtype=np.int64))
-                for j, (i, s, skip, ahead, behind) in enumerate(members):
-                    try:
-                        _check_start(s, kmax, bases[j], *checks[j].tolist())
-                    except ValueError as e:
-                        refuse(i, skip, e)
-                        continue
-                    for k, why in skip.items():
-                        out.message[i * K + k] = why
-                    M_sec[i * K:(i + 1) * K] = s.M_sec
-                    for forward, ks in ((True, ahead), (False, behind)):
-                        if not ks:
-                            continue
-                        p, t_end, directions, end = half(s, P[j], forward)
-                        # the farthest target ends the integration; the others are found on its dense output
-                        v_k = sorted((_ini.v_from_frequency(f_all[i][k], s.M_sec), i * K + k) for k in ks)
-                        if not forward:
-                            v_k.reverse()
-                        for _, r in v_k:
-                            ends[r] = end
-                        key = (rhs, events, output_mode(s), Y0.shape[1])
-                        groups.setdefault(key, []).append((v_k[-1][1], Y0[j], p, t_end, directions, s, v_k[:-1]))
-            integrating += _integrate_groups(groups, float(atol), float(rtol), int(max_steps), out, counts)
+                bg = Binaries(*(x[g] for x in b))
+                rhs, events, P, Y0, bases, checks = build_rows(opts, bg, parts, g)
+                keep = np.ones(g.size, dtype=bool)
+                for q, c in enumerate(checks.tolist()):
+                    if _ended_at(*c[:4]) or c[4]:
+                        j = g[q].item()
+                        try:
+                            _check_start(settings_of(start + j, f_lo[j].item(), f_hi[j].item()), kmax, bases[q], *c)
+                        except ValueError as e:
+                            refuse(start + j, e)
+                            keep[q] = False
+                ids = start + g[keep]
+                if listed:
+                    hq, hfwd, hrow, nearer = [], [], [], []
+                    for q, i in zip(np.flatnonzero(keep).tolist(), ids.tolist()):
+                        M_sec[i * K:(i + 1) * K] = bg.M_sec[q]
+                        for k, why in skips[i].items():
+                            out.message[i * K + k] = why
+                        for forward, ks in ((True, aheads[i]), (False, behinds[i])):
+                            if not ks:
+                                continue
+                            # the farthest target ends the integration; the others are found on its dense output
+                            v_k = sorted((_ini.v_from_frequency(f_all[i][k], bg.M_sec[q].item()), i * K + k)
+                                         for k in ks)
+                            if not forward:
+                                v_k.reverse()
+                            for _, r in v_k:
+                                ends[r] = "f_max" if forward else "f_min"   # (listed targets are finite)
+                            hq.append(q)
+                            hfwd.append(forward)
+                            hrow.append(v_k[-1][1])
+                            nearer.append(v_k[:-1])
+                    hq, hfwd, hrow = np.array(hq, dtype=np.int64), np.array(hfwd, dtype=bool), np.array(hrow, dtype=np.int64)
+                    width = max((len(x) for x in nearer), default=0)
+                    near_r, near_v = np.full((hq.size, width), -1, dtype=np.int64), np.full((hq.size, width), np.nan)
+                    for h, x in enumerate(nearer):
+                        for w, (vk, r) in enumerate(x):
+                            near_v[h, w], near_r[h, w] = vk, r
+                else:
+                    hq, hrow = np.flatnonzero(keep), ids
+                    hfwd = np.isnan(f_lo[g[keep]])
+                    M_sec[ids] = bg.M_sec[keep]
+                    ends[ids] = np.where(hfwd, np.where(np.isnan(f_hi[g[keep]]), "v_max", "f_max"), "f_min")
+                    near_r, near_v = np.empty((hq.size, 0), dtype=np.int64), np.empty((hq.size, 0))
+                Ph, t_end, directions = P[hq], np.empty(hq.size), np.empty((hq.size, N_EVENTS))
+                for forward in (True, False):
+                    sel = hfwd == forward
+                    q = hq[sel]
+                    Ph[sel], t_end[sel], directions[sel] = half(bg.v0[q], bg.nu[q], bg.v_min[q], P[q], forward)
+                integrating += _integrate_group(rhs, events, mode[aligned], float(atol), float(rtol), int(max_steps),
+                                                Y0[hq], Ph, t_end, directions, bg.R0[hq], bg.ell_hat[hq],
+                                                bg.chi1[hq], bg.chi2[hq], hrow, near_v, near_r, out, counts)
     named = {}    # (status, event, end) → termination: a few kinds among many rows
-    for r, key in enumerate(zip(counts[:, 0].tolist(), counts[:, 1].tolist(), ends)):
+    for r, key in enumerate(zip(counts[:, 0].tolist(), counts[:, 1].tolist(), ends.tolist())):
         if key[2] is not None:
             if key not in named:
                 named[key] = termination(*key, reference.approximant)

@@ -30,11 +30,11 @@ MODE_ALIGNED, MODE_COPRECESSING, MODE_ORBITAL = 0, 1, 2
 """How a state row becomes a history row: see :func:`_store_block`."""
 
 
-def output_mode(settings):
-    """The :func:`_fill_history` mode of a run's state."""
-    if settings.use_aligned:
+def output_mode(use_aligned, rotor):
+    """The :func:`_fill_history` mode of a run's state: its Settings' ``use_aligned`` and ``rotor``."""
+    if use_aligned:
         return MODE_ALIGNED
-    return MODE_ORBITAL if settings.rotor == "orbital" else MODE_COPRECESSING
+    return MODE_ORBITAL if rotor == "orbital" else MODE_COPRECESSING
 
 
 _BLOCK = 64
@@ -308,8 +308,8 @@ def compile_output_kernel(s):
     not after it: 0.8 s of the CLI's cold start (measured); and so is :func:`_phase_roots` for a per-orbit run
     (0.6 s)."""
     if not _fill_history.overloads:
-        _fill_history(output_mode(s), _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, _NO_Y, *_fixed(s), 0,
-                      *_allocate_history(0))
+        _fill_history(output_mode(s.use_aligned, s.rotor), _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, _NO_Y,
+                      *_fixed(s), 0, *_allocate_history(0))
     if s.sampling == "per_orbit" and not _phase_roots.overloads:
         _phase_roots(_NO_SEG, _NO_SEG, _NO_COEF, 0, _NO_T, 0.0, _NO_T)
 
@@ -317,7 +317,7 @@ def compile_output_kernel(s):
 def sample(s, res_f, res_b):
     """(t in M, (v, Φ, χ₁, χ₂, R, ℓ̂)) of the run with :class:`~pnrotor.pn.settings.Settings` ``s`` from its
     forward result ``res_f`` and backward result ``res_b`` (None if not integrated), at ``s.sampling``."""
-    mode = output_mode(s)
+    mode = output_mode(s.use_aligned, s.rotor)
     fixed = _fixed(s)
     if s.sampling in ("final", "steps"):
         return _sample_steps(s.sampling, mode, fixed, res_f, res_b)

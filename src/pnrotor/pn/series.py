@@ -291,8 +291,9 @@ def fold_basis(C, basis_values):
 
 
 def basis_values(a1, a2, s12, s11, s22):
-    """The nine invariants from ℓ̂·χ₁, ℓ̂·χ₂, χ₁·χ₂, χ₁·χ₁, χ₂·χ₂."""
-    return np.array([1.0, a1, a2, s12, a1 * a2, s11, a1 * a1, s22, a2 * a2])
+    """The nine invariants from ℓ̂·χ₁, ℓ̂·χ₂, χ₁·χ₂, χ₁·χ₁, χ₂·χ₂: floats → (9,), or arrays (n,) → (9, n)."""
+    one = 1.0 if isinstance(a1, float) else np.ones_like(a1)
+    return np.array([one, a1, a2, s12, a1 * a2, s11, a1 * a1, s22, a2 * a2])
 
 
 def evaluate(C, v, basis):

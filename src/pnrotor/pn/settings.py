@@ -6,9 +6,10 @@ units (G = c = M = 1, :mod:`pnrotor.pn.initial`): v at f_ref, f_min and f_max, t
 (x̂, ŷ, ẑ) → (n̂, λ̂, ℓ̂), the mass ratio, the PN orders with their defaults, and the spin content
 (nonspinning, aligned or precessing) that decides which right-hand side is compiled in.  It does so in
 two parts: :func:`options` (the model and integration options, which the binaries of ``evolve_many`` share
-and it checks once) and :func:`binary_settings` (the binary).  Every bad input is a ``ValueError`` naming
-the parameter and its allowed range.  No numba here: the later stages (:mod:`pnrotor.pn.evolve`,
-:mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
+and it checks once) and :func:`binary_settings` (the binary); :func:`population_settings` does the second for
+arrays of binaries at once (bitwise the same numbers), leaving the binaries it does not pass to
+binary_settings.  Every bad input is a ``ValueError`` naming the parameter and its allowed range.  No numba
+here: the later stages (:mod:`pnrotor.pn.evolve`, :mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
 """
 
 import functools
@@ -180,6 +181,95 @@ def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, 
     spin_content, c1, c2 = _spin_content(c1, c2, ell)
     return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, ell, n, kappa1, kappa2, *o, M_sec, X1, X1 * (1.0 - X1), v0,
                     v_min, v_max, _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
+
+
+class Binaries(NamedTuple):
+    """The per-binary fields of :class:`Settings` for a population (:func:`population_settings`), row i binary i:
+    M_sec, X1, nu, v0 (n,); v_min (n,), NaN without f_min; v_max (n,), 1 without f_max; chi1, chi2, ell_hat (n, 3);
+    R0 (n, 4); ``aligned`` (n,), Settings.use_aligned; ``valid`` (n,), whether the row holds a binary's values."""
+
+    M_sec: np.ndarray
+    X1: np.ndarray
+    nu: np.ndarray
+    v0: np.ndarray
+    v_min: np.ndarray
+    v_max: np.ndarray
+    chi1: np.ndarray
+    chi2: np.ndarray
+    ell_hat: np.ndarray
+    R0: np.ndarray
+    aligned: np.ndarray
+    valid: np.ndarray
+
+    def put(self, i, s):
+        """Row i from the Settings s of binary i."""
+        for name in ("M_sec", "X1", "nu", "v0", "v_max", "chi1", "chi2", "ell_hat", "R0"):
+            getattr(self, name)[i] = getattr(s, name)
+        self.v_min[i] = math.nan if s.v_min is None else s.v_min
+        self.aligned[i] = s.use_aligned
+        self.valid[i] = True
+
+
+def population_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2):
+    """:func:`binary_settings` of n binaries with :class:`Options` ``o`` over float64 arrays ((n,), (n, 3); NaN in
+    f_min and f_max for none) → :class:`Binaries`.  Where a binary passes every check of binary_settings, its row is
+    valid and holds bitwise that function's numbers (the same operations in the same order, elementwise; pow as
+    libm's, :func:`~pnrotor.pn.initial.elementwise`); every other row is left invalid for binary_settings to
+    refuse, with its message (``evolve_many``: ~2 µs per binary against ~25 µs for binary_settings)."""
+    n = m1.shape[0]
+    with np.errstate(all="ignore"):
+        def positive(x):
+            return np.isfinite(x) & (x > 0.0)
+
+        def unit(a):
+            norm = np.sqrt(a[:, 0] * a[:, 0] + a[:, 1] * a[:, 1] + a[:, 2] * a[:, 2])
+            return a / norm[:, None], np.isfinite(a).all(axis=1) & ~(np.abs(norm - 1.0) > 1e-8)
+
+        ok = positive(m1) & positive(m2) & positive(f_ref) & ~(np.maximum(m1, m2) > MAX_MASS_RATIO * np.minimum(m1, m2))
+        ok &= np.isfinite(kappa1) & (kappa1 >= 0.0) & np.isfinite(kappa2) & (kappa2 >= 0.0)
+        for c in (chi1, chi2):
+            ok &= np.isfinite(c).all(axis=1) & ~(c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1] + c[:, 2] * c[:, 2] > 1.0 + 1e-14)
+        ell, ok_l = unit(ell_hat)
+        nh, ok_n = unit(n_hat)
+        dot = ell[:, 0] * nh[:, 0] + ell[:, 1] * nh[:, 1] + ell[:, 2] * nh[:, 2]
+        ok &= ok_l & ok_n & ~(np.abs(dot) > 1e-8)
+        nh = nh - dot[:, None] * ell
+        nh = nh / np.sqrt(nh[:, 0] * nh[:, 0] + nh[:, 1] * nh[:, 1] + nh[:, 2] * nh[:, 2])[:, None]
+        M_sec = (m1 + m2) * _ini.MTSUN_SI
+        X1 = m1 / (m1 + m2)
+
+        def v_at(f, given):
+            return _ini.elementwise(_ini.v_from_frequency, np.where(given, f, 1.0), np.where(given, M_sec, 1.0))
+
+        v0 = v_at(f_ref, ok)
+        ok &= (v0 < 1.0) & (v0 >= V_MIN)
+        has_min, has_max = ~np.isnan(f_min), ~np.isnan(f_max)
+        ok &= ~has_min | positive(f_min)
+        ok &= ~has_max | positive(f_max)
+        v_min, v_max = v_at(f_min, ok & has_min), v_at(f_max, ok & has_max)
+        ok &= ~has_min | ((v_min >= V_MIN) & (v_min < v0))
+        ok &= ~has_max | ((v_max <= 1.0) & (v_max > v0))
+        # _spin_content
+        a1 = chi1[:, 0] * ell[:, 0] + chi1[:, 1] * ell[:, 1] + chi1[:, 2] * ell[:, 2]
+        a2 = chi2[:, 0] * ell[:, 0] + chi2[:, 1] * ell[:, 1] + chi2[:, 2] * ell[:, 2]
+
+        def in_plane(c, a):
+            d = c - a[:, None] * ell
+            return d[:, 0] ** 2 + d[:, 1] ** 2 + d[:, 2] ** 2 > 1e-28
+
+        precessing = ((chi1 != 0.0).any(axis=1) | (chi2 != 0.0).any(axis=1)) & (in_plane(chi1, a1) | in_plane(chi2, a2))
+        c1 = np.where(precessing[:, None], chi1, a1[:, None] * ell)
+        c2 = np.where(precessing[:, None], chi2, a2[:, None] * ell)
+    R0 = np.full((n, 4), np.nan)
+    frames = np.ascontiguousarray(np.concatenate([ell, nh], axis=1))
+    first = np.flatnonzero(ok)[:1]
+    if first.size:   # the frames that equal the first valid row's bitwise (usually all) take its rotor
+        same = (frames.view(np.int64) == frames[first].view(np.int64)).all(axis=1) & ok
+        R0[same] = _frame_rotor(frames[first[0]].tobytes())
+        for i in np.flatnonzero(ok & ~same).tolist():
+            R0[i] = _frame_rotor(frames[i].tobytes())
+    return Binaries(M_sec, X1, X1 * (1.0 - X1), v0, np.where(has_min, v_min, np.nan), np.where(has_max, v_max, 1.0),
+                    c1, c2, ell, R0, ~precessing & (not o.integrate_rotor), ok)
 
 
 @functools.lru_cache(maxsize=16)
