@@ -59,7 +59,7 @@ def median_us(f, calls):
 
 def core_call(s, system, t_eval, dense):
     """The compiled DOP853 core of the forward half with the arguments ``dop853`` would prepare, as a thunk."""
-    p, t_end, directions, _ = half(s, system.p, True)
+    p, t_end, directions = half(s.v0, s.nu, s.v_min, system.p, True)
     n = system.y0.size
     functions = _function_addresses(system.rhs, by_address(no_after_step, AFTER_STEP_SIG), system.events)
     args = (functions, 0.0, system.y0, t_end, p,

@@ -197,8 +197,8 @@ def kmax_of(s):
 
 
 def _functions(use_aligned, precession):
-    """(right-hand side, events) of a run, by address: :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) where
-    it ``use_aligned`` (Settings), for nonspinning and aligned spins, else :func:`~pnrotor.pn.system.rhs_precessing`
+    """(right-hand side, events) of a run, by address: :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) if
+    ``use_aligned`` (its Settings' flag: nonspinning and aligned spins), else :func:`~pnrotor.pn.system.rhs_precessing`
     (state [v, χ₁, χ₂, R, Φ]; or :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with
     ``precession='instantaneous'``)."""
     if use_aligned:

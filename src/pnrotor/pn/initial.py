@@ -151,7 +151,11 @@ def spin_vector(chi, name):
     return np.array([x, y, z])
 
 
-def orthonormal_frame(ell_hat, n_hat, tol=1e-8):
+FRAME_TOL = 1e-8
+"""How far from unit length and from orthogonal ℓ̂ and n̂ may be (:func:`orthonormal_frame`)."""
+
+
+def orthonormal_frame(ell_hat, n_hat, tol=FRAME_TOL):
     """(ℓ̂, n̂) checked to be unit and orthogonal within ``tol`` and then made exactly so."""
     vecs = []
     for name, a in (("ell_hat", ell_hat), ("n_hat", n_hat)):

@@ -13,8 +13,9 @@ of those states, binary by binary:
   initial states and start checks that ``evolve`` builds one at a time (:func:`~pnrotor.pn.evolve.build_system`)
   in one compiled call per right-hand side (:func:`~pnrotor.pn.evolve.build_rows`); a binary whose inputs are
   invalid gets termination ``'invalid'`` and the error's text as its message, NaN in its state, and the others go
-  on.  Python is left per binary only for a list of frequencies (each binary's targets sorted on either side) and
-  for refusals;
+  on.  Python per binary is left to libm's pow (v at the frequencies, the Newtonian times:
+  :func:`~pnrotor.pn.initial.elementwise`), the screen of the start checks, the end names, and, where they apply,
+  a list of frequencies (each binary's targets sorted on either side) and the refusals;
 * the integrations run in one ``numba.prange`` loop over the chunk's binaries (threads across cores), each
   a call of the DOP853 core with output of the final state only (and of the dense output where a list has
   nearer targets), grouped by right-hand side (the [v, Φ] system of nonspinning and aligned binaries, the
@@ -384,12 +385,14 @@ integrate_rotor, precession, max_steps
     counts = np.zeros((nr, 4), dtype=np.int64)
     with np.errstate(all="ignore"):   # an invalid binary's row is never used: settings refuses it first
         X1 = m1a / (m1a + m2a)
-    # per binary in Python floats and lists: numpy on a few numbers costs ~0.5-1 µs per operation
-    f_all, m1l, m2l, frl, k1l, k2l, c1l, c2l, elll, nhl = (x.tolist() for x in (targets, m1a, m2a, fref, k1, k2, c1,
-                                                                                c2, ell, nh))
+    # per binary in Python floats and lists, for the lists of targets and the refusals (numpy on a few numbers costs
+    # ~0.5-1 µs per operation); with the collector paused: the lists cost 14 µs per binary with it walking them
+    with _collector_paused():
+        f_all, m1l, m2l, frl, k1l, k2l, c1l, c2l, elll, nhl = (x.tolist() for x in (targets, m1a, m2a, fref, k1, k2,
+                                                                                    c1, c2, ell, nh))
     kmax = kmax_of(reference)
     mode = {aligned: output_mode(aligned, reference.rotor) for aligned in (True, False)}
-    skips, aheads, behinds = [{}] * n, [[0]] * n, [[]] * n   # per binary with a list: refused targets, the others
+    skips, aheads, behinds = [{}] * n, [None] * n, [None] * n   # per binary: a list's refused targets, the others
 
     def settings_of(i, f_min, f_max):
         """binary_settings of binary i (a ValueError if it is invalid) with f_min and f_max (NaN: none)."""
@@ -472,7 +475,7 @@ integrate_rotor, precession, max_steps
                             hfwd.append(forward)
                             hrow.append(v_k[-1][1])
                             nearer.append(v_k[:-1])
-                    hq, hfwd, hrow = np.array(hq, dtype=np.int64), np.array(hfwd, dtype=bool), np.array(hrow, dtype=np.int64)
+                    hq, hfwd, hrow = (np.array(x, dtype=t) for x, t in ((hq, np.int64), (hfwd, bool), (hrow, np.int64)))
                     width = max((len(x) for x in nearer), default=0)
                     near_r, near_v = np.full((hq.size, width), -1, dtype=np.int64), np.full((hq.size, width), np.nan)
                     for h, x in enumerate(nearer):
@@ -484,11 +487,16 @@ integrate_rotor, precession, max_steps
                     M_sec[ids] = bg.M_sec[keep]
                     ends[ids] = np.where(hfwd, np.where(np.isnan(f_hi[g[keep]]), "v_max", "f_max"), "f_min")
                     near_r, near_v = np.empty((hq.size, 0), dtype=np.int64), np.empty((hq.size, 0))
-                Ph, t_end, directions = P[hq], np.empty(hq.size), np.empty((hq.size, N_EVENTS))
+                # the halves' parameter vectors (~5 kB each): P itself where each row has one half, in order
+                Ph = P if np.array_equal(hq, np.arange(P.shape[0])) else P[hq]
+                t_end, directions = np.empty(hq.size), np.empty((hq.size, N_EVENTS))
                 for forward in (True, False):
-                    sel = hfwd == forward
+                    sel = np.flatnonzero(hfwd == forward)
                     q = hq[sel]
-                    Ph[sel], t_end[sel], directions[sel] = half(bg.v0[q], bg.nu[q], bg.v_min[q], P[q], forward)
+                    p, t_end[sel], directions[sel] = half(bg.v0[q], bg.nu[q], bg.v_min[q], Ph if forward else Ph[sel],
+                                                          forward)
+                    if not forward:   # a copy with v_end = v_min
+                        Ph[sel] = p
                 integrating += _integrate_group(rhs, events, mode[aligned], float(atol), float(rtol), int(max_steps),
                                                 Y0[hq], Ph, t_end, directions, bg.R0[hq], bg.ell_hat[hq],
                                                 bg.chi1[hq], bg.chi2[hq], hrow, near_v, near_r, out, counts)

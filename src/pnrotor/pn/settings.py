@@ -223,16 +223,17 @@ def population_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_h
 
         def unit(a):
             norm = np.sqrt(a[:, 0] * a[:, 0] + a[:, 1] * a[:, 1] + a[:, 2] * a[:, 2])
-            return a / norm[:, None], np.isfinite(a).all(axis=1) & ~(np.abs(norm - 1.0) > 1e-8)
+            return a / norm[:, None], np.isfinite(a).all(axis=1) & ~(np.abs(norm - 1.0) > _ini.FRAME_TOL)
 
         ok = positive(m1) & positive(m2) & positive(f_ref) & ~(np.maximum(m1, m2) > MAX_MASS_RATIO * np.minimum(m1, m2))
         ok &= np.isfinite(kappa1) & (kappa1 >= 0.0) & np.isfinite(kappa2) & (kappa2 >= 0.0)
         for c in (chi1, chi2):
-            ok &= np.isfinite(c).all(axis=1) & ~(c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1] + c[:, 2] * c[:, 2] > 1.0 + 1e-14)
+            square = c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1] + c[:, 2] * c[:, 2]
+            ok &= np.isfinite(c).all(axis=1) & ~(square > 1.0 + 1e-14)
         ell, ok_l = unit(ell_hat)
         nh, ok_n = unit(n_hat)
         dot = ell[:, 0] * nh[:, 0] + ell[:, 1] * nh[:, 1] + ell[:, 2] * nh[:, 2]
-        ok &= ok_l & ok_n & ~(np.abs(dot) > 1e-8)
+        ok &= ok_l & ok_n & ~(np.abs(dot) > _ini.FRAME_TOL)
         nh = nh - dot[:, None] * ell
         nh = nh / np.sqrt(nh[:, 0] * nh[:, 0] + nh[:, 1] * nh[:, 1] + nh[:, 2] * nh[:, 2])[:, None]
         M_sec = (m1 + m2) * _ini.MTSUN_SI
@@ -255,7 +256,7 @@ def population_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_h
 
         def in_plane(c, a):
             d = c - a[:, None] * ell
-            return d[:, 0] ** 2 + d[:, 1] ** 2 + d[:, 2] ** 2 > 1e-28
+            return d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2] > 1e-28
 
         precessing = ((chi1 != 0.0).any(axis=1) | (chi2 != 0.0).any(axis=1)) & (in_plane(chi1, a1) | in_plane(chi2, a2))
         c1 = np.where(precessing[:, None], chi1, a1[:, None] * ell)
@@ -299,7 +300,7 @@ def masses_and_frequencies(m1, m2, f_ref, f_min, f_max):
 def frequencies(m1, m2, f_ref, f_min, f_max):
     """(G M/c³ in s, X₁, v at f_ref, at f_min (or None), at f_max (or 1)), checking the mass ratio, the order of
     the frequencies, V_MIN ≤ v < 1 at f_min and f_ref and v ≤ 1 at f_max (of :func:`masses_and_frequencies`' values; also the
-    population mode's check of its rows)."""
+    check of a population's rows that :func:`population_settings` does not pass)."""
     if not max(m1, m2) <= MAX_MASS_RATIO * min(m1, m2):
         raise ValueError(f"m1/m2 = {m1 / m2:.4g}: the mass ratio must be at most {MAX_MASS_RATIO:g} either way")
     M_sec = _ini.total_mass_seconds(m1, m2)
@@ -342,8 +343,11 @@ def _spin_content(c1, c2, ell):
     a1 = x1 * lx + y1 * ly + z1 * lz
     a2 = x2 * lx + y2 * ly + z2 * lz
     if x1 or y1 or z1 or x2 or y2 or z2:
-        if ((x1 - a1 * lx) ** 2 + (y1 - a1 * ly) ** 2 + (z1 - a1 * lz) ** 2 > 1e-28
-                or (x2 - a2 * lx) ** 2 + (y2 - a2 * ly) ** 2 + (z2 - a2 * lz) ** 2 > 1e-28):
+        # squares as products: Python's x ** 2 is libm's pow, numpy's (population_settings) is x * x, and the two
+        # differ in the last bit for ~0.1% of numbers, which could classify a spin on the bound differently
+        dx1, dy1, dz1 = x1 - a1 * lx, y1 - a1 * ly, z1 - a1 * lz
+        dx2, dy2, dz2 = x2 - a2 * lx, y2 - a2 * ly, z2 - a2 * lz
+        if dx1 * dx1 + dy1 * dy1 + dz1 * dz1 > 1e-28 or dx2 * dx2 + dy2 * dy2 + dz2 * dz2 > 1e-28:
             return "precessing", c1, c2
         content = "aligned"
     else:
