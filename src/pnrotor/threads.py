@@ -10,8 +10,11 @@ the output is bitwise the same (tested).  Much of a large output's cost is the f
 :func:`pnrotor.pn.sampling.sample`, were tried the same way and gained nothing measurable: evolve of the 30+10 M☉
 precessing run at 1/4096 s 0.74 ms whole, 0.82 ms in two parts; 238,041 samples of a BNS 20.1 and 22.1 ms.)
 
+:func:`pnrotor.evolve_many` runs its integrations on the same threads, a few binaries per part as each thread is
+free (:func:`pnrotor.pn.many._integrate_group`).
+
 Threads: numba's (``NUMBA_NUM_THREADS``, or what ``numba.set_num_threads`` set for the calling thread once numba's
-parallel layer runs, e.g. after :func:`pnrotor.evolve_many`), at most :func:`limit`'s (the worker processes of a
+parallel layer runs, which set_num_threads launches), at most :func:`limit`'s (the worker processes of a
 batch take one each: they already fill the cores) and :func:`limited`'s (a batch's Dask tasks: one each); 1 computes
 everything on the calling thread. A part has about the ``min_part`` samples its caller gives at least
 (:func:`parts`): handing a part to a worker and back costs ~40 µs here (median of a call in two parts with nothing

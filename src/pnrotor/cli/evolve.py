@@ -22,7 +22,7 @@ A row that fails (bad value, evolve's ``ValueError``) is listed with its row num
 the others are still written; exit status 1 then, 2 when the batch file itself is unusable.
 
 Population: ``pnrotor evolve --batch params.csv --population`` computes only each row's final state (an empty
-sampling cell means final), all together with `pnrotor.evolve_many` (one compiled parallel loop per group
+sampling cell means final), all together with `pnrotor.evolve_many` (one compiled loop on pnrotor's threads per group
 of rows sharing its shared options), and writes them as one table of columns, a `PopulationTable`
 (`pnrotor.batch.population`, which this module calls): the state at f_max, at f_min (integrated backward)
 or at the end of the inspiral.  Options of the other batch modes (--jobs, --scheduler, --resume, the modes)

@@ -16,7 +16,8 @@ of those states, binary by binary:
   on.  Python per binary is left to libm's pow (v at the frequencies, the Newtonian times:
   :func:`~pnrotor.pn.initial.elementwise`), the screen of the start checks, the end names, and, where they apply,
   a list of frequencies (each binary's targets sorted on either side) and the refusals;
-* the integrations run in one ``numba.prange`` loop over the chunk's binaries (threads across cores), each
+* the integrations run in one compiled loop over the chunk's binaries, on :mod:`pnrotor.threads`' threads (a
+  ``nogil`` kernel; numba's thread count, :func:`pnrotor.threads.thread_count`), each
   a call of the DOP853 core with output of the final state only (and of the dense output where a list has
   nearer targets), grouped by right-hand side (the [v, Φ] system of nonspinning and aligned binaries, the
   precessing one);
@@ -40,11 +41,10 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from .. import numba_cache
+from .. import numba_cache, threads
 from ..ode import AFTER_STEP_SIG, by_address
 from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
                           STATUS_EVENT, _crossed, _dop853_core, _events_function, _function_addresses, _locate_root,
@@ -61,6 +61,9 @@ __all__ = ["evolve_many", "Population"]
 
 CHUNK = 4096
 """Binaries prepared and integrated together: bounds the memory of their parameter vectors (~10 kB each)."""
+_HALVES = 8
+"""Halves a thread integrates per call of :func:`_integrate_all`: 1-2 ms of integration for a call's ~10 µs of
+dispatch, and at most that left for one thread at the end."""
 
 
 
@@ -108,11 +111,11 @@ class Population:
         return self.t.shape[0]
 
 
-@njit(parallel=True, cache=True)
-def _integrate_all(functions, Y0, P, t_end, directions, atol, rtol, max_steps, safety,
+@njit(nogil=True, cache=True)
+def _integrate_all(lo, hi, functions, Y0, P, t_end, directions, atol, rtol, max_steps, safety,
                    min_factor, max_factor, mode, R0, ell0, c1, c2, rows, near_v, near_rows, t, v, Phi, chi1, chi2,
                    R, ell, counts, no_t, out_mode):
-    """Half k of the group (state Y0[k], parameters P[k]) integrated by the DOP853 core with ``functions``
+    """Each half k = lo … hi−1 of the group (state Y0[k], parameters P[k]) integrated by the DOP853 core with ``functions``
     (:data:`pnrotor.ode.dop853.FUNCTIONS_LAYOUT`) to its end; its final state into row
     rows[k] of the outputs (t, v, …, ℓ̂) and (status, event index, step attempts, evaluations) into
     counts[rows[k]]; the states at the nearer targets v = near_v[k, j] into the rows near_rows[k, j] (−1:
@@ -122,7 +125,7 @@ def _integrate_all(functions, Y0, P, t_end, directions, atol, rtol, max_steps, s
     ~7 s)."""
     n_events = directions.shape[1]
     events = _events_function(functions[4], functions[5])
-    for k in prange(Y0.shape[0]):
+    for k in range(lo, hi):
         want_dense = near_rows.shape[1] > 0 and near_rows[k, 0] >= 0
         t_out, y_out, seg_t, seg_h, seg_c, iv, fv, _ = _dop853_core(
             functions, 0.0, Y0[k], t_end[k], P[k], atol, rtol, 0.0, np.inf, max_steps, no_t,
@@ -260,17 +263,26 @@ def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, dir
     """Halves k = 0 … n−1 of one right-hand side (initial states Y0[k], parameter vectors P[k], t_end[k], event
     directions[k], the run's R₀, ℓ̂, χ₁, χ₂ at f_ref, output row rows[k], nearer targets near_v[k] in rows near_r[k])
     integrated by :func:`_integrate_all` into the rows of ``out`` and ``counts`` → the seconds its compiled loops
-    took.  The halves go to the threads one at a time as each is free (numba's chunk size 1): an even split left
-    one thread idle at the end, ~4% of the loop (measured, 4,000 binaries on two threads)."""
+    took.  The loop runs on :func:`pnrotor.threads.run`'s threads (a ``nogil`` kernel), each taking the next
+    :data:`_HALVES` halves as it is free: numba's parallel loop (``prange``) took as long to run and ~12 s longer to
+    compile cold (measured: 4,000 binaries, six alternating pairs of processes; a first call with the core cached
+    30.4-31.8 s against 17.7-19.8 s), and an even split left one thread idle at the end, ~4% of the loop."""
     atol_a, rtol_a = _tolerances(Y0.shape[1], atol, rtol)
     args = (_function_addresses(rhs, by_address(no_after_step, AFTER_STEP_SIG), events), Y0, P, t_end, directions,
             atol_a, rtol_a, max_steps, *_CONTROLLER, mode, R0, ell, chi1, chi2, rows, near_v, near_r, out.t, out.v,
             out.Phi, out.chi1, out.chi2, out.R, out.ell_hat, counts, np.empty(0), OUT_FINAL)
     start = time.perf_counter()
-    if not _integrate_all.overloads:   # it is compiled with the DOP853 core inside: load the core that the
-        numba_cache.wait_for_aside("core")   # CLI may be compiling in another process, not compile it twice
-    with numba.parallel_chunksize(1):
-        _integrate_all(*args)
+    if not _integrate_all.overloads:   # it is compiled with the DOP853 core inside: load the core that the CLI may
+        numba_cache.wait_for_aside("core")   # be compiling in another process, not compile it twice; and here,
+        _integrate_all(0, 0, *args)          # once, before the threads call it
+    n = Y0.shape[0]
+    starts = iter(range(0, n, _HALVES))   # shared by the threads (next() holds the GIL)
+
+    def work(_lo, _hi):
+        for lo in starts:
+            _integrate_all(lo, min(lo + _HALVES, n), *args)
+
+    threads.run(work, [(0, n)] * max(1, min(threads.thread_count(), -(-n // _HALVES))))
     return time.perf_counter() - start
 
 
@@ -350,7 +362,8 @@ def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_
 integrate_rotor, precession, max_steps
         As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
 
-    The number of threads is numba's (``numba.set_num_threads``, ``NUMBA_NUM_THREADS``).  Invalid shared
+    The number of threads is :func:`pnrotor.threads.thread_count`'s (numba's: ``numba.set_num_threads``,
+    ``NUMBA_NUM_THREADS``; at most :func:`pnrotor.threads.limit`'s).  Invalid shared
     options or array shapes raise a ValueError; an invalid binary does not (module docstring).
     """
     wall0 = time.perf_counter()
