@@ -139,7 +139,7 @@ def test_bad_shapes_and_shared_options_raise(call, match):
 
 
 def test_evolve_many_calls_the_one_compiled_core(cold_python):
-    """In a fresh process with an empty numba cache (so that the parallel loop is compiled, 15-50 s), evolve_many
+    """In a fresh process with an empty numba cache (so that the loop around the core is compiled, 15-50 s), evolve_many
     leaves the DOP853 core with its one signature: written as constants in the loop, the output mode and
     dense flag made numba compile (and cache) a second core.  And none of its kernels compiles numba's
     shape-mismatch error path (an array assignment such as N[i] = series: 5.4 s of string formatting in
@@ -396,3 +396,29 @@ def test_population_settings_are_binary_settings_row_by_row(integrate_rotor):
         assert (np.isnan(b.v_min[i]) and s.v_min is None) or b.v_min[i].tobytes() == np.float64(s.v_min).tobytes()
     assert 24 < n_valid < table[0].size - 20
     assert {False, True} <= set(b.aligned[b.valid]) or integrate_rotor
+
+
+def test_an_exception_on_one_thread_stops_the_loop_within_a_block(monkeypatch):
+    """The CLI's SIGTERM raises KeyboardInterrupt on the calling thread between two of its blocks of halves: the other
+    thread takes no further block (a review: it integrated the rest of the group alone, as long as the whole call)."""
+    import threading
+    import time
+
+    from pnrotor import threads
+    from pnrotor.pn import many
+
+    calls = []
+
+    def loop(lo, hi, *args):
+        calls.append(lo)
+        if threading.current_thread() is threading.main_thread() and len(calls) >= 3:
+            raise KeyboardInterrupt
+        time.sleep(0.02)
+
+    loop.overloads = {"compiled": None}
+    monkeypatch.setattr(many, "_integrate_all", loop)
+    monkeypatch.setattr(threads, "thread_count", lambda: 2)
+    table = _table(200, 6)
+    with pytest.raises(KeyboardInterrupt):
+        evolve_many(*table[:4], 20.0, ell_hat=table[4], n_hat=table[5])
+    assert 3 <= len(calls) <= 5 and threads._busy == 0   # of ~13 blocks in the first group

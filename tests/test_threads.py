@@ -368,3 +368,31 @@ def test_ctrl_c_at_any_moment_leaves_no_part_running_and_the_counts_right():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert " late 0 busy 0" in done.stdout and "interrupted 0 " not in done.stdout, done.stdout
+
+
+def test_a_signal_handlers_exception_while_waiting_is_raised_after_every_part():
+    """A handler that raises (the CLI's SIGTERM and SIGHUP raise KeyboardInterrupt) while the caller waits for a
+    worker's part: raised once that part is done, not while it still writes, and ``stop`` is called at once (a review
+    found run returning while a worker ran on)."""
+    done, stops = [], []
+    claimed = threading.Event()
+
+    def raising(signum, frame):
+        raise RuntimeError("handler")
+
+    def kernel(lo, hi):
+        if lo:   # a worker's part: the signal comes while it runs and the caller waits for it
+            claimed.set()
+            time.sleep(0.3)
+            done.append(lo)
+        else:
+            assert claimed.wait(10)
+            threading.Timer(0.05, os.kill, (os.getpid(), signal.SIGUSR1)).start()
+
+    before = signal.signal(signal.SIGUSR1, raising)
+    try:
+        with pytest.raises(RuntimeError, match="handler"):
+            threads.run(kernel, [(0, 1), (1, 2)], stop=lambda: stops.append(len(done)))
+    finally:
+        signal.signal(signal.SIGUSR1, before)
+    assert done == [1] and stops == [0] and threads._busy == 0

@@ -10,8 +10,9 @@ the output is bitwise the same (tested).  Much of a large output's cost is the f
 :func:`pnrotor.pn.sampling.sample`, were tried the same way and gained nothing measurable: evolve of the 30+10 M☉
 precessing run at 1/4096 s 0.74 ms whole, 0.82 ms in two parts; 238,041 samples of a BNS 20.1 and 22.1 ms.)
 
-:func:`pnrotor.evolve_many` runs its integrations on the same threads, a few binaries per part as each thread is
-free (:func:`pnrotor.pn.many._integrate_group`).
+:func:`pnrotor.evolve_many` runs its integrations on the same threads: one part per thread, each taking the next
+eight halves from a shared iterator as it is free, until the iterator is empty or :func:`run` says stop
+(:func:`pnrotor.pn.many._integrate_group`; :func:`parts`' ``min_part`` does not apply).
 
 Threads: numba's (``NUMBA_NUM_THREADS``, or what ``numba.set_num_threads`` set for the calling thread once numba's
 parallel layer runs, which set_num_threads launches), at most :func:`limit`'s (the worker processes of a
@@ -94,28 +95,44 @@ def parts(n, min_part, align=1):
     return list(zip(bounds[:-1], bounds[1:]))
 
 
-def run(kernel, ranges):
+def run(kernel, ranges, stop=None):
     """kernel(lo, hi) for every range of :func:`parts`: the first on this thread, the others handed to the workers,
     and those no worker has started yet when this thread's own is done run here too (so concurrent or nested calls
     never wait for a free worker).  Returns when every part is done or dropped, also when one raises: this thread's
-    exception (then the parts no thread has started are dropped), else the first part's in range order, is raised.  On the main thread a Ctrl-C during the call is held and
-    delivered once every part is done, so no part writes after the call.  During interpreter finalization the whole
-    range runs on this thread."""
+    exception (then the parts no thread has started are dropped; also one a signal handler raises while this thread
+    waits for the others, e.g. the CLI's SIGTERM), else the first part's in range order, is raised.  ``stop``, if
+    given, is called as soon as this thread has such an exception, for kernels that take their work in blocks and
+    can return early (``evolve_many``'s loop): the call raises anyway.  On the main thread a Ctrl-C during the call
+    is held and delivered once every part is done, so no part writes after the call.  During interpreter
+    finalization the whole range runs on this thread."""
     if len(ranges) == 1 or sys.is_finalizing():
         kernel(ranges[0][0], ranges[-1][1])
         return
     handed = [_Part(kernel, lo, hi) for lo, hi in ranges[1:]]
     error = None
+
+    def failed(e):
+        nonlocal error
+        if error is None:
+            error = e
+            if stop is not None:
+                stop()
+
     with _sigint_held():
         _hand_out(handed)
         try:
             kernel(*ranges[0])
         except BaseException as e:
-            error = e
+            failed(e)
         for part in handed:   # after an error here, the parts not started are dropped
             part.run_if_unclaimed(compute=error is None)
         for part in handed:
-            part.done.wait()
+            while True:   # a signal handler's exception while waiting is kept, and the parts still waited for
+                try:
+                    part.done.wait()
+                    break
+                except BaseException as e:
+                    failed(e)
             if error is None:
                 error = part.error
             part.error = None   # no cycle through the traceback: the part's arrays go when the caller's do

@@ -113,7 +113,7 @@ def add_parser(subparsers):
                        help="run the batch on this Dask scheduler (e.g. tcp://host:8786); needs pnrotor[dask]")
     batch.add_argument("--population", action="store_true",
                        help="final states only, for population synthesis: every row computed together by "
-                       "pnrotor.evolve_many (numba's threads; 26-42x the rows/s of the per-row batch) and written as "
+                       "pnrotor.evolve_many (pnrotor's threads; 26-42x the rows/s of the per-row batch) and written as "
                        "one table, a column per quantity (docs/hdf5-schema.md); each row's state at f_max, at "
                        "f_min (integrated backward) or at the end of the inspiral; sampling must be final (an "
                        "empty cell means final); not with --jobs, --scheduler, --resume or --modes")
@@ -322,7 +322,7 @@ def _run_population(args, start):
              if getattr(args, option) is not None and getattr(args, option) is not False]
     if given:
         raise UsageError(f"{', '.join(given)} cannot be combined with --population (one process computes the final "
-                         "states, on numba's threads; no histories, so no modes)")
+                         "states, on pnrotor's threads; no histories, so no modes)")
     defaults = _table_defaults(args)
     if defaults["sampling"] not in (None, "final"):
         raise UsageError(f"--sampling must be final with --population (final states only), got {args.sampling!r}")

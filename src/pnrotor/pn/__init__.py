@@ -7,7 +7,8 @@ vector, numba right-hand sides and events), :mod:`~pnrotor.pn.initial` (units, f
 and one run's stages: :mod:`~pnrotor.pn.settings` (inputs checked → ``Settings``),
 :mod:`~pnrotor.pn.evolve` (the specialized system, the two integrations, and ``evolve`` →
 :class:`Evolution`) and :mod:`~pnrotor.pn.sampling` (the output history from the dense output); :mod:`~pnrotor.pn.many`
-(``evolve_many``: a population of binaries to one end state each, in one parallel compiled loop).
+(``evolve_many``: a population of binaries to one end state each, in a compiled ``nogil`` loop on pnrotor's
+threads).
 """
 
 from .evolve import Evolution, evolve, lalsuite_orders

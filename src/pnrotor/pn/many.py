@@ -1,4 +1,4 @@
-r"""``evolve_many``: a population of binaries, each integrated to one end, in one compiled parallel loop.
+r"""``evolve_many``: a population of binaries, each integrated to one end, in a compiled loop on pnrotor's threads.
 
 What population studies need from each binary is one state or a few: the spins and ℓ̂ at a target
 frequency (forward or backward from f_ref), the state at a list of frequencies, or the state at the end of
@@ -16,8 +16,8 @@ of those states, binary by binary:
   on.  Python per binary is left to libm's pow (v at the frequencies, the Newtonian times:
   :func:`~pnrotor.pn.initial.elementwise`), the screen of the start checks, the end names, and, where they apply,
   a list of frequencies (each binary's targets sorted on either side) and the refusals;
-* the integrations run in one compiled loop over the chunk's binaries, on :mod:`pnrotor.threads`' threads (a
-  ``nogil`` kernel; numba's thread count, :func:`pnrotor.threads.thread_count`), each
+* the integrations run in calls of one compiled ``nogil`` loop, eight halves per call, per right-hand side and
+  chunk, on :mod:`pnrotor.threads`' threads (numba's thread count, :func:`pnrotor.threads.thread_count`), each
   a call of the DOP853 core with output of the final state only (and of the dense output where a list has
   nearer targets), grouped by right-hand side (the [v, Φ] system of nonspinning and aligned binaries, the
   precessing one);
@@ -62,8 +62,8 @@ __all__ = ["evolve_many", "Population"]
 CHUNK = 4096
 """Binaries prepared and integrated together: bounds the memory of their parameter vectors (~10 kB each)."""
 _HALVES = 8
-"""Halves a thread integrates per call of :func:`_integrate_all`: 1-2 ms of integration for a call's ~10 µs of
-dispatch, and at most that left for one thread at the end."""
+"""Halves a thread integrates per call of :func:`_integrate_all`: 1-2 ms of integration for a call's ~3 µs of
+dispatch, and at most that left for one thread at the end (or after an interrupt)."""
 
 
 
@@ -277,12 +277,20 @@ def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, dir
         _integrate_all(0, 0, *args)          # once, before the threads call it
     n = Y0.shape[0]
     starts = iter(range(0, n, _HALVES))   # shared by the threads (next() holds the GIL)
+    stopped = []   # an exception on one thread (a signal's: the CLI's SIGTERM): the others take no further block
 
     def work(_lo, _hi):
-        for lo in starts:
-            _integrate_all(lo, min(lo + _HALVES, n), *args)
+        try:
+            for lo in starts:
+                if stopped:
+                    return
+                _integrate_all(lo, min(lo + _HALVES, n), *args)
+        except BaseException:
+            stopped.append(True)
+            raise
 
-    threads.run(work, [(0, n)] * max(1, min(threads.thread_count(), -(-n // _HALVES))))
+    threads.run(work, [(0, n)] * max(1, min(threads.thread_count(), -(-n // _HALVES))),
+                stop=lambda: stopped.append(True))
     return time.perf_counter() - start
 
 
