@@ -396,3 +396,24 @@ def test_a_signal_handlers_exception_while_waiting_is_raised_after_every_part():
     finally:
         signal.signal(signal.SIGUSR1, before)
     assert done == [1] and stops == [0] and threads._busy == 0
+
+
+def test_a_ctrl_c_stops_kernels_that_take_blocks():
+    """With Python's own SIGINT handler (it raises KeyboardInterrupt once the call ends), a held Ctrl-C calls ``stop``
+    at once: kernels that take their work in blocks (evolve_many's loop) stop within a block, not after the rest."""
+    blocks, stopped = iter(range(200)), []
+    taken = []
+
+    def kernel(lo, hi):
+        for b in blocks:
+            if stopped:
+                return
+            taken.append(b)
+            if b == 5:
+                threading.Timer(0.0, os.kill, (os.getpid(), signal.SIGINT)).start()
+            time.sleep(0.01)
+
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    with pytest.raises(KeyboardInterrupt):
+        threads.run(kernel, [(0, 1), (1, 2)], stop=lambda: stopped.append(True))
+    assert 6 <= len(taken) <= 12 and threads._busy == 0

@@ -103,7 +103,8 @@ def run(kernel, ranges, stop=None):
     waits for the others, e.g. the CLI's SIGTERM), else the first part's in range order, is raised.  ``stop``, if
     given, is called as soon as this thread has such an exception, for kernels that take their work in blocks and
     can return early (``evolve_many``'s loop): the call raises anyway.  On the main thread a Ctrl-C during the call
-    is held and delivered once every part is done, so no part writes after the call.  During interpreter
+    is held and delivered once every part is done, so no part writes after the call (``stop`` is called at once if
+    it will raise KeyboardInterrupt then: Python's own handler).  During interpreter
     finalization the whole range runs on this thread."""
     if len(ranges) == 1 or sys.is_finalizing():
         kernel(ranges[0][0], ranges[-1][1])
@@ -118,7 +119,7 @@ def run(kernel, ranges, stop=None):
             if stop is not None:
                 stop()
 
-    with _sigint_held():
+    with _sigint_held(stop):
         _hand_out(handed)
         try:
             kernel(*ranges[0])
@@ -228,16 +229,24 @@ def _hand_out(handed):
 
 
 @contextmanager
-def _sigint_held():
+def _sigint_held(stop=None):
     """On the main thread: a SIGINT during the block is recorded and raised again after it (a KeyboardInterrupt
-    between two statements of :func:`run` could leave its counts wrong or its parts running after it).  Elsewhere,
-    or where Python does not own the SIGINT handler, nothing."""
+    between two statements of :func:`run` could leave its counts wrong or its parts running after it); ``stop`` is
+    called at once where the handler it goes to is Python's own, which raises KeyboardInterrupt (another might not
+    raise, and a call stopped early would return a partial result).  Elsewhere, or where Python does not own the
+    SIGINT handler, nothing."""
     previous = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
     if previous is None:
         yield
         return
     caught = []
-    signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+
+    def held(signum, frame):
+        caught.append(signum)
+        if stop is not None and previous is signal.default_int_handler:
+            stop()
+
+    signal.signal(signal.SIGINT, held)
     try:
         yield
     finally:
