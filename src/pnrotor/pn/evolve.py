@@ -318,12 +318,17 @@ def integrate_half(s, system, forward, t_eval, dense):
     :func:`~pnrotor.pn.settings.settings` and :func:`build_system`, so its core is called directly
     (``pnrotor.ode.dop853._integrate``)."""
     p, t_end, directions = half(s.v0, s.nu, s.v_min, system.p, forward)
-    end = "f_min" if not forward else "f_max" if s.f_max is not None else "v_max"
     res = _integrate(system.rhs, _default_hook("after_step"), system.events, 0.0, system.y0, t_end, p,
                      *_tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
                      _NO_T_EVAL, OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, _sys.N_EVENTS, directions,
                      *_CONTROLLER)
-    return res, termination(res.status, res.event_index, end, s.approximant)
+    return res, termination(res.status, res.event_index, end_name(forward, s.f_max is not None), s.approximant)
+
+
+def end_name(forward, f_max_given):
+    """The name of a half's end-frequency termination: 'f_max' (forward to a given f_max), 'v_max' (forward to the end
+    of the inspiral) or 'f_min' (backward)."""
+    return ("f_max" if f_max_given else "v_max") if forward else "f_min"
 
 
 @functools.lru_cache(maxsize=8)

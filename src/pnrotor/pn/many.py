@@ -45,14 +45,13 @@ import numpy as np
 from numba import njit
 
 from .. import numba_cache, threads
-from ..ode import AFTER_STEP_SIG, by_address
 from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
-                          STATUS_EVENT, _crossed, _dop853_core, _events_function, _function_addresses, _locate_root,
-                          no_after_step)
+                          STATUS_EVENT, _crossed, _default_hook, _dop853_core, _events_function, _function_addresses,
+                          _locate_root)
 from ..ode.result import contd8
 from . import initial as _ini
-from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _ended_at, _tolerances, build_rows, half,
-                     kmax_of, population_parts, termination)
+from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _ended_at, _tolerances, build_rows, end_name,
+                     half, kmax_of, population_parts, termination)
 from .sampling import _fill_history, output_mode
 from .settings import Binaries, binary_settings, options, population_settings, target_v
 from .system import EV_V_END, N_EVENTS, P_VEND
@@ -268,7 +267,7 @@ def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, dir
     compile cold (measured: 4,000 binaries, six alternating pairs of processes; a first call with the core cached
     30.4-31.8 s against 17.7-19.8 s), and an even split left one thread idle at the end, ~4% of the loop."""
     atol_a, rtol_a = _tolerances(Y0.shape[1], atol, rtol)
-    args = (_function_addresses(rhs, by_address(no_after_step, AFTER_STEP_SIG), events), Y0, P, t_end, directions,
+    args = (_function_addresses(rhs, _default_hook("after_step"), events), Y0, P, t_end, directions,
             atol_a, rtol_a, max_steps, *_CONTROLLER, mode, R0, ell, chi1, chi2, rows, near_v, near_r, out.t, out.v,
             out.Phi, out.chi1, out.chi2, out.R, out.ell_hat, counts, np.empty(0), OUT_FINAL)
     start = time.perf_counter()
@@ -491,7 +490,7 @@ integrate_rotor, precession, max_steps
                             if not forward:
                                 v_k.reverse()
                             for _, r in v_k:
-                                ends[r] = "f_max" if forward else "f_min"   # (listed targets are finite)
+                                ends[r] = end_name(forward, True)   # (listed targets are finite)
                             hq.append(q)
                             hfwd.append(forward)
                             hrow.append(v_k[-1][1])
@@ -506,7 +505,7 @@ integrate_rotor, precession, max_steps
                     hq, hrow = np.flatnonzero(keep), ids
                     hfwd = np.isnan(f_lo[g[keep]])
                     M_sec[ids] = bg.M_sec[keep]
-                    ends[ids] = np.where(hfwd, np.where(np.isnan(f_hi[g[keep]]), "v_max", "f_max"), "f_min")
+                    ends[ids] = [end_name(fw, hi == hi) for fw, hi in zip(hfwd.tolist(), f_hi[g[keep]].tolist())]
                     near_r, near_v = np.empty((hq.size, 0), dtype=np.int64), np.empty((hq.size, 0))
                 # the halves' parameter vectors (~5 kB each): P itself where each row has one half, in order
                 Ph = P if np.array_equal(hq, np.arange(P.shape[0])) else P[hq]
