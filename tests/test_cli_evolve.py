@@ -596,16 +596,18 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     """With no compiled DOP853 core in numba's cache (an empty NUMBA_CACHE_DIR), one line on stderr says
     that the kernels are being compiled, once, and the core's compilation starts in another process; with
     the cache filled, nothing; a run writing modes also starts the modes kernels' compilation aside while
-    they are missing."""
+    they are missing; while the core compiles aside, this process compiles two of its callees."""
     from pnrotor import numba_cache
     from pnrotor.cli import evolve as cli_evolve
-    started = []
+    dop853 = sys.modules["pnrotor.ode.dop853"]   # the module (pnrotor.ode.dop853 is also its function)
+    started, here = [], []
     monkeypatch.setattr(numba_cache, "compile_aside", started.append)
+    monkeypatch.setattr(dop853, "compile_core_parts", lambda: here.append("core parts"))
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(in_tmp / "empty-cache"))
     cli_evolve._warn_if_cold()
     assert capsys.readouterr().err == ("pnrotor: compiling its numba kernels for this machine, once (~15-20 s); "
                                        "later runs load them in ~1-2 s\n")
-    assert started == ["core"]
+    assert started == ["core"] and here == ["core parts"]
     core = Path(numba_cache.cache_folder()) / "dop853._dop853_core-495.py311.nbi"
     assert core.parent.parent == in_tmp / "empty-cache"
     core.parent.mkdir(parents=True)
@@ -613,7 +615,7 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     cli_evolve._warn_if_cold()
     assert capsys.readouterr().err == "" and started == ["core"]
     cli_evolve._warn_if_cold(modes=True)
-    assert "(~20-30 s)" in capsys.readouterr().err and started == ["core", "modes"]
+    assert "(~20-30 s)" in capsys.readouterr().err and started == ["core", "modes"] and here == ["core parts"]
     kernels = Path(numba_cache.cache_folder("waveform")) / "amplitudes._sum-215.py311.nbi"
     assert kernels.parent.parent == in_tmp / "empty-cache"
     kernels.parent.mkdir(parents=True)
@@ -646,6 +648,30 @@ def test_what_is_compiled_aside_is_what_the_cache_then_holds(tmp_path, monkeypat
     numba_cache.wait_for_aside(what)
     assert process.returncode == 0 and what not in numba_cache._asides
     assert not numba_cache.is_cold(kernel, package)
+
+
+SHARED = """import sys
+from pnrotor.pn.evolve import evolve
+import pnrotor.ode.dop853
+d = sys.modules["pnrotor.ode.dop853"]
+d.compile_core_parts()
+n = len(compiled)
+d.compile_core()
+evolve(10.0, 10.0, (0, 0, 0), (0, 0, 0), 20.0, f_max=30.0)
+evolve(30.0, 10.0, (0.6, 0, 0.2), (0, -0.4, 0.1), 20.0, f_max=30.0, sampling=1 / 256)
+print([c for c in compiled[n:] if any(k in c for k in ("_locate_root", "_append_segment"))])
+print(len(d._locate_root.signatures), len(d._append_segment.signatures))
+print(any("_dop853_core" in c for c in compiled[n:]))
+"""
+
+
+def test_the_core_parts_compiled_here_are_the_ones_the_core_calls(cold_python):
+    """What the CLI compiles in this process while another compiles the core (compile_core_parts: two callees the
+    core then loads) is compiled for exactly the types the core calls them with: neither is compiled again by the
+    core or by runs (a second signature would be each compiled twice, the time not saved).  In one fresh process
+    with an empty cache (~30 s)."""
+    out = cold_python(SHARED)
+    assert out.split("\n")[:3] == ["[]", "1 1", "True"], out
 
 
 SLOW_RUN = """

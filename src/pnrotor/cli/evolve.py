@@ -124,8 +124,10 @@ def _warn_if_cold(here=True, population=False, modes=False):
     """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent wait; if
     this process runs the evolutions (``here``), the biggest kernel, the DOP853 core, is compiled in a second
     process meanwhile (`pnrotor.numba_cache.compile_aside`; worker processes compile their own), and so are the
-    kernels of the ``modes`` it will write, in a third.  A ``population`` run also compiles `evolve_many`'s loop
-    around the core (which loads the core compiled aside): the line is said when either is missing."""
+    kernels of the ``modes`` it will write, in a third; this process first compiles two of the core's callees, which
+    the core's process then loads (`pnrotor.ode.dop853.compile_core_parts`).  A ``population`` run also compiles
+    `evolve_many`'s loop around the core (which loads the core compiled aside): the line is said when either is
+    missing."""
     from pnrotor import numba_cache
 
     core = numba_cache.is_cold()
@@ -138,6 +140,10 @@ def _warn_if_cold(here=True, population=False, modes=False):
             numba_cache.compile_aside("core")
         if here and waves:
             numba_cache.compile_aside("modes")
+        if here and core:
+            from pnrotor.ode.dop853 import compile_core_parts
+
+            compile_core_parts()
 
 
 def run(args):

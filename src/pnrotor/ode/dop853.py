@@ -232,6 +232,17 @@ def compile_core():
     _entry_point(_dop853_core, _CORE_SIG)
 
 
+def compile_core_parts():
+    """Compile two callees of the DOP853 core into numba's cache (or load them), for the types the core calls them
+    with: what a process that started :func:`compile_core` in another one (the CLI on a cold cache,
+    :func:`pnrotor.numba_cache.compile_aside`) does first.  That process meets them last, ~7-9 s into the core's
+    compile, and loads them from the cache instead of compiling them, ~2 s less of its work: without this its
+    compile ended ~4-5 s after everything else of a cold run had compiled (numba's compile events of both processes,
+    a cold ``pnrotor evolve``)."""
+    _locate_root.compile((types.FunctionType(EVENTS_SIG), _A1, _i8, _f8, _f8, _f8, _f8, _f8, _f8, _A2, _A1, _A1))
+    _append_segment.compile((_A1, _A1, _A3, _i8, _f8, _f8, _A2))
+
+
 # --------------------------------------------------------------------------------------------------
 # numba kernels (compiled into the core)
 # --------------------------------------------------------------------------------------------------
