@@ -107,6 +107,35 @@ def test_results_do_not_depend_on_the_number_of_threads():
         np.testing.assert_array_equal(getattr(one, k), getattr(many, k))
 
 
+
+def test_every_half_is_integrated_once_on_two_threads(monkeypatch):
+    """The threads take blocks of halves from one shared range: every half of a group is integrated exactly once
+    (comparing outputs, as above, cannot see a half integrated twice)."""
+    import threading
+    import time
+
+    from pnrotor import threads
+    from pnrotor.pn import many
+
+    real, blocks, names = many._integrate_all, {}, set()
+
+    def loop(lo, hi, *args):
+        blocks.setdefault(id(args[1]), (args[1].shape[0], []))[1].append((lo, hi))   # args[1]: the group's Y0
+        names.add(threading.current_thread().name)
+        real(lo, hi, *args)
+        time.sleep(0.005)   # long enough a block that both threads take some
+
+    loop.overloads = real.overloads
+    monkeypatch.setattr(many, "_integrate_all", loop)
+    monkeypatch.setattr(threads, "thread_count", lambda: 2)
+    table = _table(60, 7)
+    evolve_many(*table[:4], 20.0, ell_hat=table[4], n_hat=table[5])
+    assert blocks and len(names) == 2
+    for n, done in blocks.values():
+        halves = [k for lo, hi in done for k in range(lo, hi)]
+        assert sorted(halves) == list(range(n)), (n, done)
+
+
 @pytest.mark.parametrize("call, match", [
     (lambda: evolve_many([], [], np.zeros((0, 3)), np.zeros((0, 3)), 20.0), "m1 has no binary"),
     (lambda: evolve_many([30, 20], [10, 10, 10], [0, 0, 0], [0, 0, 0], 20.0), "same length N .* got m1 2, m2 3"),
