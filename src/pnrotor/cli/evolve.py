@@ -133,7 +133,8 @@ def _warn_if_cold(here=True, population=False, modes=False):
     core = numba_cache.is_cold()
     waves = modes and numba_cache.is_cold("amplitudes._sum", "waveform")
     if core or waves or population and numba_cache.is_cold("many._integrate_all", "pn"):
-        wait = "~20-25" if population else "~20-30" if waves else "~15-20"
+        # measured on a 2-core VM in its fast and slow phases (the README's cold start)
+        wait = "~35-45" if population else "~20-35" if waves else "~10-25"
         print(f"pnrotor: compiling its numba kernels for this machine, once ({wait} s); later runs load them in ~1-2 s",
               file=sys.stderr, flush=True)
         if here and core:
