@@ -107,7 +107,6 @@ def test_results_do_not_depend_on_the_number_of_threads():
         np.testing.assert_array_equal(getattr(one, k), getattr(many, k))
 
 
-
 def test_every_half_is_integrated_once_on_two_threads(monkeypatch):
     """The threads take blocks of halves from one shared range: every half of a group is integrated exactly once
     (comparing outputs, as above, cannot see a half integrated twice)."""
@@ -120,7 +119,7 @@ def test_every_half_is_integrated_once_on_two_threads(monkeypatch):
     real, blocks, names = many._integrate_all, {}, set()
 
     def loop(lo, hi, *args):
-        blocks.setdefault(id(args[1]), (args[1].shape[0], []))[1].append((lo, hi))   # args[1]: the group's Y0
+        blocks.setdefault(id(args[1]), (args[1], []))[1].append((lo, hi))   # args[1]: the group's Y0, kept alive
         names.add(threading.current_thread().name)
         real(lo, hi, *args)
         time.sleep(0.005)   # long enough a block that both threads take some
@@ -131,9 +130,9 @@ def test_every_half_is_integrated_once_on_two_threads(monkeypatch):
     table = _table(60, 7)
     evolve_many(*table[:4], 20.0, ell_hat=table[4], n_hat=table[5])
     assert blocks and len(names) == 2
-    for n, done in blocks.values():
+    for Y0, done in blocks.values():
         halves = [k for lo, hi in done for k in range(lo, hi)]
-        assert sorted(halves) == list(range(n)), (n, done)
+        assert sorted(halves) == list(range(Y0.shape[0])), (Y0.shape, done)
 
 
 @pytest.mark.parametrize("call, match", [
