@@ -3,6 +3,7 @@ refusal to overwrite, one-line errors (exit 2, no file) for bad input, sampling 
 from CSV and TOML in this process, on worker processes and on a Dask cluster, with failures listed."""
 
 import dataclasses
+import importlib
 import math
 import os
 import subprocess
@@ -599,7 +600,7 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     they are missing; while the core compiles aside, this process compiles two of its callees."""
     from pnrotor import numba_cache
     from pnrotor.cli import evolve as cli_evolve
-    dop853 = sys.modules["pnrotor.ode.dop853"]   # the module (pnrotor.ode.dop853 is also its function)
+    dop853 = importlib.import_module("pnrotor.ode.dop853")   # the module (pnrotor.ode.dop853 is also its function)
     started, here = [], []
     monkeypatch.setattr(numba_cache, "compile_aside", started.append)
     monkeypatch.setattr(dop853, "compile_core_parts", lambda: here.append("core parts"))
@@ -668,8 +669,8 @@ print(any("_dop853_core" in c for c in compiled[n:]))
 def test_the_core_parts_compiled_here_are_the_ones_the_core_calls(cold_python):
     """What the CLI compiles in this process while another compiles the core (compile_core_parts: two callees the
     core then loads) is compiled for exactly the types the core calls them with: neither is compiled again by the
-    core or by runs (a second signature would be each compiled twice, the time not saved).  In one fresh process
-    with an empty cache (~30 s)."""
+    core or by evolve (a second signature would be each compiled twice, the time not saved; evolve_many's loop
+    compiles its own _locate_root for a literal event index).  In one fresh process with an empty cache (~30-40 s)."""
     out = cold_python(SHARED)
     assert out.split("\n")[:3] == ["[]", "1 1", "True"], out
 

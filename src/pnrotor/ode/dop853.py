@@ -238,9 +238,12 @@ def compile_core_parts():
     :func:`pnrotor.numba_cache.compile_aside`) does first.  That process meets them last, ~7-9 s into the core's
     compile, and loads them from the cache instead of compiling them, ~2 s less of its work: without this its
     compile ended ~4-5 s after everything else of a cold run had compiled (numba's compile events of both processes,
-    a cold ``pnrotor evolve``)."""
-    _locate_root.compile((types.FunctionType(EVENTS_SIG), _A1, _i8, _f8, _f8, _f8, _f8, _f8, _f8, _A2, _A1, _A1))
-    _append_segment.compile((_A1, _A1, _A3, _i8, _f8, _f8, _A2))
+    a cold ``pnrotor evolve``).  Only a saving: if it fails, the core's process compiles them as before."""
+    try:
+        _locate_root.compile((types.FunctionType(EVENTS_SIG), _A1, _i8, _f8, _f8, _f8, _f8, _f8, _f8, _A2, _A1, _A1))
+        _append_segment.compile((_A1, _A1, _A3, _i8, _f8, _f8, _A2))
+    except Exception:  # pragma: no cover - numba internals changed
+        pass
 
 
 # --------------------------------------------------------------------------------------------------
