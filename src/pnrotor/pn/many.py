@@ -114,9 +114,9 @@ class Population:
 def _integrate_all(lo, hi, functions, Y0, P, t_end, directions, atol, rtol, max_steps, safety,
                    min_factor, max_factor, mode, R0, ell0, c1, c2, rows, near_v, near_rows, t, v, Phi, chi1, chi2,
                    R, ell, counts, no_t, out_mode):
-    """Each half k = lo … hi−1 of the group (state Y0[k], parameters P[k]) integrated by the DOP853 core with ``functions``
-    (:data:`pnrotor.ode.dop853.FUNCTIONS_LAYOUT`) to its end; its final state into row
-    rows[k] of the outputs (t, v, …, ℓ̂) and (status, event index, step attempts, evaluations) into
+    """Each half k = lo … hi−1 of the group (state Y0[k], parameters P[k]) integrated by the DOP853 core with
+    ``functions`` (:data:`pnrotor.ode.dop853.FUNCTIONS_LAYOUT`) to its end; its final state into row rows[k] of the
+    outputs (t, v, …, ℓ̂) and (status, event index, step attempts, evaluations) into
     counts[rows[k]]; the states at the nearer targets v = near_v[k, j] into the rows near_rows[k, j] (−1:
     none), by :func:`_nearer_targets` on the dense output, computed only for halves that have them.  ``no_t``
     (empty) stands for the unused times, and ``out_mode`` (OUT_FINAL) comes as an argument so that the core is
@@ -260,12 +260,12 @@ def _target_table(f_end, frequencies, n):
 def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, directions, R0, ell, chi1, chi2, rows,
                      near_v, near_r, out, counts):
     """Halves k = 0 … n−1 of one right-hand side (initial states Y0[k], parameter vectors P[k], t_end[k], event
-    directions[k], the run's R₀, ℓ̂, χ₁, χ₂ at f_ref, output row rows[k], nearer targets near_v[k] in rows near_r[k])
-    integrated by :func:`_integrate_all` into the rows of ``out`` and ``counts`` → the seconds its compiled loops
-    took.  The loop runs on :func:`pnrotor.threads.run`'s threads (a ``nogil`` kernel), each taking the next
-    :data:`_HALVES` halves as it is free: numba's parallel loop (``prange``) took as long to run and ~12 s longer to
-    compile cold (measured: 4,000 binaries, six alternating pairs of processes; a first call with the core cached
-    30.4-31.8 s against 17.7-19.8 s), and an even split left one thread idle at the end, ~4% of the loop."""
+    directions[k], the run's R₀, ℓ̂, χ₁, χ₂ at f_ref, output row rows[k], nearer targets near_v[k] in rows
+    near_r[k]) integrated by :func:`_integrate_all` into the rows of ``out`` and ``counts`` → the seconds its
+    compiled loops took.  The loop runs on :func:`pnrotor.threads.run`'s threads (a ``nogil`` kernel), each taking
+    the next :data:`_HALVES` halves as it is free: numba's parallel loop (``prange``) took as long to run and ~12 s
+    longer to compile cold (measured: 4,000 binaries, six alternating pairs of processes; a first call with the core
+    cached 30.4-31.8 s against 17.7-19.8 s), and an even split left one thread idle at the end, ~4% of the loop."""
     atol_a, rtol_a = _tolerances(Y0.shape[1], atol, rtol)
     args = (_function_addresses(rhs, _default_hook("after_step"), events), Y0, P, t_end, directions,
             atol_a, rtol_a, max_steps, *_CONTROLLER, mode, R0, ell, chi1, chi2, rows, near_v, near_r, out.t, out.v,
@@ -495,7 +495,8 @@ integrate_rotor, precession, max_steps
                             hfwd.append(forward)
                             hrow.append(v_k[-1][1])
                             nearer.append(v_k[:-1])
-                    hq, hfwd, hrow = (np.array(x, dtype=t) for x, t in ((hq, np.int64), (hfwd, bool), (hrow, np.int64)))
+                    hq, hrow = np.array(hq, dtype=np.int64), np.array(hrow, dtype=np.int64)
+                    hfwd = np.array(hfwd, dtype=bool)
                     width = max((len(x) for x in nearer), default=0)
                     near_r, near_v = np.full((hq.size, width), -1, dtype=np.int64), np.full((hq.size, width), np.nan)
                     for h, x in enumerate(nearer):
@@ -505,7 +506,8 @@ integrate_rotor, precession, max_steps
                     hq, hrow = np.flatnonzero(keep), ids
                     hfwd = np.isnan(f_lo[g[keep]])
                     M_sec[ids] = bg.M_sec[keep]
-                    ends[ids] = [end_name(fw, hi == hi) for fw, hi in zip(hfwd.tolist(), f_hi[g[keep]].tolist())]
+                    ends[ids] = [end_name(fw, not math.isnan(hi)) for fw, hi in zip(hfwd.tolist(),
+                                                                                    f_hi[g[keep]].tolist())]
                     near_r, near_v = np.empty((hq.size, 0), dtype=np.int64), np.empty((hq.size, 0))
                 # the halves' parameter vectors (~5 kB each): P itself where each row has one half, in order
                 Ph = P if np.array_equal(hq, np.arange(P.shape[0])) else P[hq]
