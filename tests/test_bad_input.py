@@ -69,6 +69,10 @@ EVOLVE_CASES = [
     (dict(n_hat=(10 ** 400, 0, 0)), "n_hat"), (dict(kappa1=10 ** 400), "kappa1"), (dict(atol=10 ** 400), "atol"),
     (dict(rtol=10 ** 400), "rtol"), (dict(pn_order=10 ** 400), "pn_order"), (dict(spin_orbit_order=10 ** 400),
                                                                               "spin_orbit_order"),
+    # a review of 2026-11-28: numbers as text were taken (evolve_many refuses them)
+    (dict(m1="30"), "m1"), (dict(f_ref=b"20"), "f_ref"), (dict(f_max=bytearray(b"200")), "f_max"),
+    (dict(kappa1="2"), "kappa1"), (dict(pn_order="3.5"), "pn_order"), (dict(spin_spin_order=np.str_("2")),
+                                                                        "spin_spin_order"),
 ]
 
 
@@ -159,7 +163,7 @@ def test_sample_count_is_bounded_by_memory_before_allocating(sampling, monkeypat
     or an OverflowError (the last case fits in memory unless only 1 MB is free, as pretended here)."""
     from pnrotor.pn import sampling as pn_sampling
     if sampling == 1 / 4096:
-        monkeypatch.setattr(pn_sampling, "_available_memory", lambda: 2 ** 20)
+        monkeypatch.setattr(pn_sampling, "available_memory", lambda: 2 ** 20)
     with pytest.raises(ValueError, match=r"sampling = .* would need .* samples \(.* GiB\), more than"):
         pnrotor.evolve(**GOOD, sampling=sampling)
 

@@ -582,6 +582,21 @@ def test_full_disk_is_one_line_and_leaves_no_file(in_tmp, capsys, monkeypatch):
     assert os.listdir(in_tmp) == []
 
 
+def test_out_of_memory_is_one_line_and_leaves_no_file(in_tmp, capsys, monkeypatch):
+    """A MemoryError that the checks before allocating did not foresee (another process took the memory; numpy's
+    words here): exit 1, one line, no traceback, no file (a review of 2026-11-28: a traceback)."""
+    from pnrotor.waveform import modes
+
+    def short(*args, **kwargs):
+        raise MemoryError("Unable to allocate 4.77 GiB for an array with shape (77, 4161322) and data type complex128")
+
+    monkeypatch.setattr(modes, "modes", short)
+    code, out, err = evolve(capsys, *FAST, "--modes", "-o", "w.h5")
+    assert code == 1 and err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith("pnrotor evolve: error: out of memory: Unable to allocate 4.77 GiB")
+    assert os.listdir(in_tmp) == []
+
+
 def test_modes_defaults_are_those_of_pnrotor_modes():
     """The CLI keeps copies of modes()' defaults (parsing does not import numba): they must be modes()' own."""
     import inspect

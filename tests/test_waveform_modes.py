@@ -124,11 +124,65 @@ def test_polarizations_are_the_quadrupole_formula_at_leading_order():
     (dict(amplitude_order=b"1"), "amplitude_order"), (dict(amplitude_order=np.True_), "amplitude_order"),
     (dict(amplitude_order=True), "amplitude_order"), (dict(distance=-1.0), "distance"),
     (dict(distance=float("nan")), "distance"),
+    # a review of 2026-11-28: an OverflowError, text taken as a number, modes scaled to 0 (1e300 Mpc is inf metres)
+    (dict(amplitude_order=10 ** 400), "amplitude_order"), (dict(distance="100"), "distance"),
+    (dict(distance=b"1"), "distance"), (dict(distance=1e300), "distance = 1e\\+300 Mpc is out of range"),
 ])
 def test_bad_arguments_name_themselves(kw, message):
     run = pnrotor.evolve(30.0, 10.0, (0, 0, 0), (0, 0, 0), 100.0, sampling="final")
     with pytest.raises(ValueError, match=message):
         modes(run, **kw)
+
+
+def test_modes_take_an_evolution():
+    """What is not an Evolution (a Modes, a file's name, None) is a TypeError saying what modes() takes, not an
+    AttributeError from inside."""
+    h = modes(pnrotor.evolve(30.0, 10.0, (0, 0, 0), (0, 0, 0), 100.0, sampling="final"), ell_max=2)
+    for wrong in (h, "run.h5", None):
+        with pytest.raises(TypeError, match="modes\\(\\) takes an Evolution"):
+            modes(wrong)
+
+
+def test_modes_and_their_rotation_are_bounded_by_memory_before_allocating(monkeypatch):
+    """Modes that would not fit (only 1 MiB free, as pretended here): a ValueError naming ell_max and sampling with
+    the size, from modes() and from Modes.in_frame, before either allocates; with the memory there they are computed."""
+    from pnrotor.pn import sampling as pn_sampling
+    run = pnrotor.evolve(**PRECESSING, sampling=DT)
+    need = 16 * 77 * len(run)   # ℓ ≤ 8: 77 complex rows
+    h = modes(run, ell_max=8)
+    monkeypatch.setattr(pn_sampling, "available_memory", lambda: need)
+    with pytest.raises(ValueError, match=f"modes\\(\\): 77 modes of {len(run)} samples would need .* GiB, more than "
+                                         ".*; choose a smaller ell_max or a coarser sampling"):
+        modes(run, ell_max=8)
+    with pytest.raises(ValueError, match=f"rotating them: 77 modes of {len(run)} samples"):
+        h.in_frame("coprecessing")
+    monkeypatch.setattr(pn_sampling, "available_memory", lambda: need + 1)
+    assert modes(run, ell_max=8).data.shape == (77, len(run))
+
+
+def test_available_memory_sees_the_address_space_limit():
+    """``ulimit -v`` (RLIMIT_AS) set in a fresh process to its current size + 64 MiB: available_memory() is at most
+    64 MiB there, and an evolve whose samples need more is refused with the sampling's ValueError, not a MemoryError
+    (they would fit in the machine's free memory)."""
+    import subprocess
+    import sys
+    code = """
+import resource
+import pnrotor
+from pnrotor.pn.sampling import available_memory
+pnrotor.evolve(1.4, 1.4, (0, 0, 0), (0, 0, 0), 300.0, sampling=1 / 65536)   # compiled (or loaded) before the limit
+with open("/proc/self/statm") as f:
+    size = int(f.read().split()[0]) * resource.getpagesize()
+resource.setrlimit(resource.RLIMIT_AS, (size + 64 * 2 ** 20, resource.RLIM_INFINITY))
+assert 0 < available_memory() <= 64 * 2 ** 20, available_memory()
+try:
+    pnrotor.evolve(1.4, 1.4, (0, 0, 0), (0, 0, 0), 30.0, sampling=1 / 65536)
+except ValueError as e:
+    print("refused:", e)
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert "refused: sampling = " in out.stdout and "more than" in out.stdout
 
 
 def test_modes_object():
@@ -137,6 +191,8 @@ def test_modes_object():
     assert h.inputs["ell_max"] == 3 and h.inputs["amplitude_order"] == 1.0 and h.inputs["m1_Msun"] == 30.0
     with pytest.raises(ValueError, match="mode"):
         h.mode(4, 0)
+    with pytest.raises(ValueError, match=r"\('2', 2\) not in these modes"):   # the input as given, not (2, 2)
+        h.mode("2", 2)
     hp, hc = h.polarizations(0.1)          # no distance anywhere: r h / M
     strain_hp, _ = h.polarizations(0.1, distance=100.0)
     np.testing.assert_allclose(strain_hp, hp * h.inputs["M_seconds"] * 299792458.0 / 3.0856775814913673e24,

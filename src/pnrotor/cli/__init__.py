@@ -98,6 +98,9 @@ def main(argv=None):
     except OSError as error:  # a full disk, a lost permission...: what the system said, in one line
         print(f"pnrotor {args.command}: error: {error}", file=sys.stderr)
         return 1
+    except MemoryError as error:  # what the memory checks before allocating could not foresee (another process's use)
+        print(f"pnrotor {args.command}: error: out of memory" + (f": {error}" if str(error) else ""), file=sys.stderr)
+        return 1
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, signal.SIG_DFL if handler is None else handler)

@@ -24,6 +24,8 @@ MTSUN_SI = 4.9254909476412675e-06
 
 _BOOLS = (bool, np.bool_)
 """Refused where a number is expected (float(True) would be 1.0)."""
+_TEXT = (str, bytes, bytearray)
+"""Refused where a number is expected too (float("30") would be 30.0): numbers only, as ``evolve_many`` takes them."""
 
 
 def _real(x):
@@ -65,7 +67,7 @@ def _positive(x, unit, name, what):
     name); must be finite and > 0, else a ValueError "`name` must be a finite positive `what`"."""
     x = in_unit(x, unit, name, f"a finite positive {what}")
     try:
-        if isinstance(x, _BOOLS):
+        if isinstance(x, _BOOLS + _TEXT):
             raise TypeError
         x = float(x)
     except (TypeError, ValueError, OverflowError):   # OverflowError: an int beyond any float (10**400)

@@ -380,7 +380,7 @@ def _order(x, name, lo, hi):
 
 def _float_or_nan(x):
     """float(x), or NaN for what is not a real number: a bool, text, None, an int beyond any float (10**400)."""
-    if isinstance(x, _ini._BOOLS):
+    if isinstance(x, _ini._BOOLS + _ini._TEXT):
         return math.nan
     try:
         return float(x)

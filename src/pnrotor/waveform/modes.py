@@ -33,11 +33,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from pnrotor import quaternion as q
+from pnrotor.pn import sampling as _sampling
+from pnrotor.pn.evolve import Evolution
 from pnrotor.pn.initial import _integer, _real
 from pnrotor.waveform import polarizations as _pol
 from pnrotor.waveform.amplitudes import modes_in_frame
 from pnrotor.waveform.layout import ell_m as _ell_m
-from pnrotor.waveform.layout import mode_index
+from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.waveform.wigner import rotate_modes
 
 __all__ = ["Modes", "modes", "check_arguments", "FRAMES"]
@@ -66,10 +68,15 @@ def _angle(value, name):
 
 
 def _scale(from_Mpc, to_Mpc, M_seconds):
-    """Factor taking modes at distance ``from_Mpc`` (None: r h / M) to strain at ``to_Mpc``."""
+    """Factor taking modes at distance ``from_Mpc`` (None: r h / M) to strain at ``to_Mpc``; a ValueError naming
+    ``distance`` where it is not a normal float64 (inf, or 0 or subnormal: the modes would be lost)."""
     metres_per_Mpc, c = _constants()
     source = M_seconds * c if from_Mpc is None else from_Mpc * metres_per_Mpc
-    return source / (to_Mpc * metres_per_Mpc)
+    scale = source / (to_Mpc * metres_per_Mpc)
+    if not sys.float_info.min <= scale < math.inf:
+        raise ValueError(f"distance = {to_Mpc!r} Mpc is out of range: it scales these modes by {scale:.3g}, "
+                         f"beyond float64's normal numbers")
+    return scale
 
 
 @functools.cache
@@ -117,7 +124,7 @@ class Modes:
     def mode(self, ell, m):
         """h_ℓm, (N,) complex."""
         if not (_integer(ell) and _integer(m) and 2 <= ell <= self.ell_max and abs(m) <= ell):
-            raise ValueError(f"mode (ell, m) = ({ell}, {m}) not in these modes: need integers "
+            raise ValueError(f"mode (ell, m) = ({ell!r}, {m!r}) not in these modes: need integers "
                              f"2 <= ell <= {self.ell_max}, |m| <= ell")
         return self.data[mode_index(ell, m)]
 
@@ -138,6 +145,7 @@ class Modes:
             raise ValueError(f"frame must be one of {', '.join(FRAMES)}; got {frame!r}")
         if frame == self.frame:
             return self
+        _check_memory(self.data.shape[0], self.data.shape[1], "rotating them")
         rotor = q.multiply(q.conjugate(self._frame_rotor(frame)), self._frame_rotor(self.frame))
         return replace(self, data=rotate_modes(self.data, rotor, self.ell_max), frame=frame)
 
@@ -176,10 +184,23 @@ def check_arguments(ell_max, amplitude_order, distance=None):
     naming the first bad one (callers check before computing a run)."""
     if not (_integer(ell_max) and 2 <= ell_max <= ELL_MAX):
         raise ValueError(f"ell_max must be an integer from 2 to {ELL_MAX}; got {ell_max!r}")
-    order2 = 2.0 * float(amplitude_order) if _real(amplitude_order) else math.nan   # no str, bytes or bools
+    try:
+        order2 = 2.0 * float(amplitude_order) if _real(amplitude_order) else math.nan   # no str, bytes or bools
+    except OverflowError:   # an int beyond any float (10**400)
+        order2 = math.nan
     if not order2 in range(8):
         raise ValueError(f"amplitude_order must be one of 0, 0.5, ..., 3.5; got {amplitude_order!r}")
     return int(ell_max), int(order2), None if distance is None else _megaparsecs(distance)
+
+
+def _check_memory(count, samples, what):
+    """A ValueError naming ell_max and sampling if ``count`` modes of ``samples`` samples (complex128) would not fit in
+    the memory available (:func:`pnrotor.pn.sampling.available_memory`), before they are allocated."""
+    need, free = 16 * count * samples, _sampling.available_memory()
+    if not need < free:
+        raise ValueError(f"{what}: {count} modes of {samples} samples would need {need / 2 ** 30:.3g} GiB, more than the "
+                         f"{free / 2 ** 30:.3g} GiB of memory available now; choose a smaller ell_max or a coarser "
+                         f"sampling")
 
 
 def _inertial(evolution, ell_max, order2, scale):
@@ -208,7 +229,11 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
     """Inertial-frame modes h_ℓm of ``evolution`` (module docstring) for ℓ ≤ ``ell_max`` (2 … 8) with
     amplitude terms through ``amplitude_order`` (0 … 3.5 in steps of 0.5), as strain at ``distance``
     (Mpc or an astropy length) or, without one, as r h / M.  Returns :class:`Modes`."""
+    if not isinstance(evolution, Evolution):
+        raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads), got "
+                        f"{type(evolution).__name__}")
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
+    _check_memory(n_modes(ell_max), len(evolution), "modes()")
     inputs = evolution.inputs
     scale = 1.0 if distance_Mpc is None else _scale(None, distance_Mpc, inputs["M_seconds"])
     h = _inertial(evolution, ell_max, order2, scale)
