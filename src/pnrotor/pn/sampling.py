@@ -263,13 +263,14 @@ def available_memory():
         free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     except (AttributeError, OSError, ValueError):  # pragma: no cover - not Linux
         free = math.inf
-    if resource is not None and resource.getrlimit(resource.RLIMIT_AS)[0] != resource.RLIM_INFINITY:
+    limit = None if resource is None else resource.getrlimit(resource.RLIMIT_AS)[0]
+    if limit is not None and limit != resource.RLIM_INFINITY:
         try:
             with open("/proc/self/statm") as f:   # the address space's size, in pages
                 size = int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
         except OSError:  # pragma: no cover - not Linux
             return free
-        free = min(free, max(resource.getrlimit(resource.RLIMIT_AS)[0] - size, 0))
+        free = min(free, max(limit - size, 0))
     return free
 
 
