@@ -424,3 +424,38 @@ def assert_same_file_run(a, b):
     for field in ("t", "data", "v", "R"):
         if hasattr(a, field):
             np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+
+
+CLOSED_BATCH = """
+import pathlib, sys, time
+from pnrotor.batch import backends
+folder = pathlib.Path(sys.argv[1])
+
+
+def row(params):
+    time.sleep(0.2)
+    (folder / f"row-{params['i']}").touch()
+
+
+backends.evolve_row = row
+results = backends.results_pool([(i, {"i": i}) for i in range(40)], 2, context="fork", chunksize=1)
+next(results)
+results.close()   # what Plan._run does on a Ctrl-C or SIGTERM
+done = len(list(folder.iterdir()))
+time.sleep(1.0)
+print(done, len(list(folder.iterdir())))
+"""
+
+
+def test_closing_a_pool_batch_stops_its_workers_at_once(tmp_path):
+    """Closing the pool's results early (a Ctrl-C or SIGTERM of a --jobs batch) cancels its queued rows and ends its
+    workers: no row runs after it (a review of 2026-11-28: shutdown forgot the workers before they were terminated,
+    and the queued rows ran on; a batch of 400 rows computed them all in 36 s more)."""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", CLOSED_BATCH, str(tmp_path)], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    done, later = map(int, out.stdout.split())
+    assert 1 <= done < 40 and later == done
