@@ -140,6 +140,11 @@ def test_every_half_is_integrated_once_on_two_threads(monkeypatch):
     (lambda: evolve_many([30, 20], [10, 10, 10], [0, 0, 0], [0, 0, 0], 20.0), "same length N .* got m1 2, m2 3"),
     (lambda: evolve_many([30, 20], [10, 10], np.zeros((3, 3)), [0, 0, 0], 20.0), "got m1 2, m2 2, chi1 3"),
     (lambda: evolve_many([True, 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
+    # a review of 2026-11-28: numbers as text were taken, as numpy converts them
+    (lambda: evolve_many(["30", 30], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
+    (lambda: evolve_many(30, 10, [0, 0, 0], ["0", 0, 0], 20.0), "chi2 must be numbers"),
+    (lambda: evolve_many(30, 10, [0, 0, 0], [0, 0, 0], np.array(["20"])), "f_ref must be numbers"),
+    (lambda: evolve_many(30, 10, [0, 0, 0], [0, 0, 0], 20.0, frequencies=[b"50", 10]), "frequencies must be numbers"),
     (lambda: evolve_many(np.array([1, 0], bool), [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),
     (lambda: evolve_many([30, 20], [10, 10], [0, 0, np.True_], [0, 0, 0], 20.0), "chi1 must be numbers"),
     (lambda: evolve_many(["abc", 20], [10, 10], [0, 0, 0], [0, 0, 0], 20.0), "m1 must be numbers"),

@@ -198,7 +198,7 @@ def _numbers(x, name, shape, unit=None):
     converted to ``unit`` (M_sun, Hz), or refused where there is none."""
     x = _ini.in_unit(x, unit, name, "numbers" if unit is None else f"numbers (in {unit})")
     try:
-        if _has_bool(x) or np.iscomplexobj(x):
+        if _has_bool_or_text(x) or np.iscomplexobj(x):
             raise TypeError
         return np.asarray(x, dtype=np.float64)
     except (TypeError, ValueError, OverflowError):
@@ -224,13 +224,14 @@ def _population_size(scalars, rows, lists):
     return n
 
 
-def _has_bool(x):
-    """Whether x is a boolean, an array of them, or a list or tuple holding one at any depth."""
+def _has_bool_or_text(x):
+    """Whether x is a boolean or text, an array of them, or a list or tuple holding one at any depth (numpy would
+    take True as 1 and "30" as 30)."""
     if isinstance(x, np.ndarray):
-        return x.dtype.kind == "b"
+        return x.dtype.kind in "bSU"
     if isinstance(x, (list, tuple)):
-        return any(_has_bool(item) for item in x)
-    return isinstance(x, _ini._BOOLS)
+        return any(_has_bool_or_text(item) for item in x)
+    return isinstance(x, _ini._BOOLS + _ini._TEXT)
 
 
 def _shape(x):
