@@ -25,23 +25,7 @@ from pycbc.psd import aLIGOZeroDetHighPower  # noqa: E402
 from pycbc.types import FrequencySeries, TimeSeries  # noqa: E402
 from pycbc.waveform.waveform import FailedWaveformError  # noqa: E402
 
-DT = 1.0 / 4096
-
-CASES = {   # m1, m2, χ₁, χ₂, f_lower, f_ref (0: f_lower), inclination, coa_phase, long_asc_nodes
-    "BBH-aligned": (30, 10, [0, 0, 0.5], [0, 0, -0.3], 20.0, 0.0, 0.7, 0.4, 0.0),
-    "BBH-precessing": (30, 10, [0.5, 0.1, 0.3], [0, 0.4, -0.2], 20.0, 25.0, 1.1, 2.3, 0.9),
-    "NSBH-aligned": (10, 1.4, [0, 0, 0.6], [0, 0, 0], 30.0, 30.0, 2.0, 1.0, 0.0),
-    "NSBH-precessing": (10, 1.4, [0.6, 0.0, 0.4], [0.02, 0.0, 0.01], 30.0, 40.0, 2.0, 5.0, 0.3),
-    "BNS-nonspinning": (1.4, 1.3, [0, 0, 0], [0, 0, 0], 40.0, 0.0, 0.3, 0.2, 0.0),
-    "BNS-precessing": (1.4, 1.3, [0.03, 0.02, 0.03], [0.0, -0.04, 0.01], 40.0, 50.0, 2.6, 4.0, 1.2),
-}
-
-
-def keywords(case, **extra):
-    m1, m2, c1, c2, f_lower, f_ref, inclination, phase, nodes = CASES[case]
-    return dict(mass1=m1, mass2=m2, spin1x=c1[0], spin1y=c1[1], spin1z=c1[2], spin2x=c2[0], spin2y=c2[1],
-                spin2z=c2[2], delta_t=DT, f_lower=f_lower, f_ref=f_ref, inclination=inclination, coa_phase=phase,
-                long_asc_nodes=nodes, distance=100.0, spin_order=6, **extra)
+from pipeline_cases import CASES, DT, pycbc_keywords as keywords  # noqa: E402
 
 
 def common(ours, theirs):
@@ -83,6 +67,16 @@ def test_matches_spintaylor_t4_at_its_highest_amplitude_order(case):
     dp, mp, dc, mc = differences(case, amplitude_order=3)
     assert max(dp, dc) < 1e-4, (dp, dc)
     assert max(mp, mc) < 1e-5, (mp, mc)
+
+
+def test_dquad_mon_is_lals_quadparam_minus_1():
+    """LAL's SpinTaylor evolves with quadparam = 1 + dQuadMon (its ChooseTDWaveform refuses dQuadMon for them, as a
+    testing-GR parameter): PyCBC's dquad_mon1,2 are pnrotor's κ₁,₂ − 1 (κ checked against LAL's orbit in
+    tests/test_pn_lal.py)."""
+    kw = keywords("BBH-precessing", amplitude_order=0)
+    dquad, kappa, bh = (waveform.get_td_waveform(approximant="PNRotorT4", **kw, **extra)[0].numpy()
+                        for extra in ({"dquad_mon1": 2.0, "dquad_mon2": 1.0}, {"kappa1": 3.0, "kappa2": 2.0}, {}))
+    assert np.array_equal(dquad, kappa) and not np.array_equal(dquad[-len(bh):], bh)
 
 
 def test_highest_amplitude_orders_differ_by_pnrotors_2pn_to_35pn_terms():

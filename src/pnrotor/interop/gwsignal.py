@@ -96,7 +96,7 @@ class PNRotorGenerator(CompactBinaryCoalescenceGenerator):
         for key, default in UNMODELLED.items():
             value = params.get(key, default) if key == "ModeArray" else _value(params, key, default)
             if not (value is default or value == default):
-                raise ValueError(f"{key} = {value!r}: PNRotor{self.approximant} does not model it (leave it at "
+                raise ValueError(f"{key} = {value}: PNRotor{self.approximant} does not model it (leave it at "
                                  f"{default!r})")
         others = sorted(k for k in params if k in standard and k not in UNITS
                         and k not in IGNORED + ("lmax", "ModeArray"))

@@ -145,6 +145,14 @@ def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, s
                      dict(options, approximant=approximant))
 
 
+def _check_masses(m1, m2):
+    """pnrotor's check of the masses, first: a host may derive f_lower from them (NaN from a negative mass)."""
+    from pnrotor.pn.initial import solar_masses
+
+    solar_masses(m1, "m1")
+    solar_masses(m2, "m2")
+
+
 def _epoch(t, delta_t):
     """LAL SpinTaylor's epoch of samples ``t``: −(N − 1)Δt, the last sample at t = 0."""
     if t.size < 2:
@@ -161,6 +169,7 @@ def spintaylor_polarizations(approximant, m1, m2, chi1, chi2, *, distance, incli
 
     if not (_real(long_asc_nodes) and math.isfinite(long_asc_nodes)):
         raise ValueError(f"long_asc_nodes must be a finite angle in radians; got {long_asc_nodes!r}")
+    _check_masses(m1, m2)
     a = arguments(approximant, f_lower, f_ref, **keywords)
     t, hp, hc = polarizations(m1, m2, chi1, chi2, a.f_ref, inclination=inclination, distance=distance,
                               delta_t=delta_t, phi_ref=phi_ref, f_min=a.f_min, ell_max=a.ell_max,
@@ -175,6 +184,7 @@ def spintaylor_modes(approximant, m1, m2, chi1, chi2, *, distance, delta_t, f_lo
     """(epoch in s, :class:`~pnrotor.waveform.modes.Modes`) on the samples of :func:`spintaylor_polarizations`, in
     the frame of LAL's ChooseTDModes(SpinTaylor…): ẑ = L̂_N, x̂ = n̂ at f_ref; seen from (ι, π/2 − φ_ref) they give
     its h₊, h× (at Ω = 0)."""
+    _check_masses(m1, m2)
     a = arguments(approximant, f_lower, f_ref, **keywords)
     m = modes(m1, m2, chi1, chi2, a.f_ref, distance=distance, delta_t=delta_t, f_min=a.f_min, ell_max=a.ell_max,
               amplitude_order=a.amplitude_order, **a.options)
