@@ -179,6 +179,8 @@ BAD = {   # keyword changes → what pnrotor's message names
     "eccentricity": ({"eccentricity": 0.1}, "eccentricity = 0.1: PNRotorT4 does not model it"),
     "tides": ({"lambda1": 400.0}, "lambda1 = 400.0: PNRotorT4 does not model it"),
     "testing GR": ({"dchi2": 0.1}, "dchi2 = 0.1"),
+    "mode array": ({"mode_array": [(2, 2)]}, "mode_array = [(2, 2)]: PNRotorT4 does not model it"),
+    "frame axis J": ({"frame_axis": 1}, "frame_axis = 1"),
     "unknown keyword": ({"ellmax": 3}, "unknown keyword 'ellmax'"),
     "two names for one order": ({"phase_order": 7, "pn_order": 3.5}, "give either phase_order or pnrotor's pn_order"),
 }

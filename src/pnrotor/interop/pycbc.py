@@ -31,11 +31,18 @@ __all__ = ["td_waveform", "length_in_time", "end_frequency", "APPROXIMANTS"]
 
 APPROXIMANTS = {f"PNRotor{a}": a for a in pipelines.APPROXIMANTS}
 
-DEFAULTS = {"eccentricity": 0.0, "mean_per_ano": 0.0, "lambda1": None, "lambda2": None, "lambda_octu1": None,
-            "lambda_octu2": None, "quadfmode1": None, "quadfmode2": None, "octufmode1": None, "octufmode2": None,
-            "frame_axis": 0, "modes_choice": 0, "mode_array": None, "numrel_data": ""}
-"""PyCBC parameters of physics pnrotor does not model, with the values that leave it out (0 too for the tides);
-the testing-GR parameters (dchi0 …, dalpha1 …, dbeta1 …) must be 0."""
+UNMODELLED = {"eccentricity": (0.0,), "mean_per_ano": (0.0,), "modes_choice": (0,), "mode_array": (None,),
+              "numrel_data": ("", None), "frame_axis": (0, 2),
+              **{key: (None, 0.0) for key in ("lambda1", "lambda2", "lambda_octu1", "lambda_octu2", "quadfmode1",
+                                              "quadfmode2", "octufmode1", "octufmode2")}}
+"""PyCBC parameters of physics or options pnrotor does not model, with the values that leave them out (frame_axis 0
+is PyCBC's "LAL's default", 2 that default, ORBITAL_L, named); the testing-GR parameters (dchi0 …, dalpha1 …,
+dbeta1 …) must be 0."""
+
+
+def _leaves_out(value, allowed):
+    return any(value is a or (a is not None and isinstance(value, (int, float, str)) and value == a) for a in allowed)
+
 
 SPINTAYLOR = ("amplitude_order", "phase_order", "spin_order", "dquad_mon1", "dquad_mon2")
 """PyCBC's keywords that :func:`pnrotor.interop.pipelines.arguments` maps."""
@@ -52,10 +59,10 @@ def _pycbc_parameters():
 def _split(name, params):
     """(binary keywords of :func:`pnrotor.interop.pipelines.spintaylor_polarizations`, SpinTaylor and pnrotor
     keywords) from PyCBC's ``params``; a ValueError for a non-default unmodelled parameter or an unknown keyword."""
-    for key, default in DEFAULTS.items():
-        value = params.get(key, default)
-        if not (value == default or (key.startswith(("lambda", "quadf", "octuf")) and value == 0)):
-            raise ValueError(f"{key} = {value!r}: {name} does not model it (leave it at {default!r})")
+    for key, allowed in UNMODELLED.items():
+        value = params.get(key, allowed[0])
+        if not _leaves_out(value, allowed):
+            raise ValueError(f"{key} = {value!r}: {name} does not model it (leave it at {allowed[0]!r})")
     for key, value in params.items():
         if key.startswith(("dchi", "dalpha", "dbeta")) and value:
             raise ValueError(f"{key} = {value!r}: {name} has no testing-GR deformations (leave it at 0)")
