@@ -4,7 +4,7 @@ References: ``gwsignal_get_waveform_generator("SpinTaylorT4")`` through Generate
 default amplitude order, 1.5PN: gwsignal's parameter check refuses a PNAmplitudeOrder key, so its amplitude order
 cannot be chosen there) and, at amplitude order 0, the call its generate_td_waveform makes
 (``SimInspiralGenerateTDWaveform`` with its own LALDict, the order inserted).  pnrotor at LAL's truncation
-(``spin_order=6``).  Goals (issue 31) as through PyCBC; measured ≤ 2e-7 of max|h| sample by sample.
+(``spin_order=6``).  Goals (issue 31) as through PyCBC; measured as there, ≤ 2.4e-6 of max|h| sample by sample.
 
 Cost: ~10 s on an idle 2-core machine, most of it importing gwsignal (gwpy).
 """
