@@ -14,13 +14,14 @@ truncation (``spin_order=6``):
 * gwsignal ``GenerateTDWaveform`` (condition 0): ``gwsignal_get_waveform_generator("SpinTaylorT4")`` at its only
   amplitude order, 1.5PN, against ``PNRotorGenerator("T4", amplitude_order=3, spin_order=6)``.
 
-Both codes give the same waveform within 1e-7 of its peak in every column (tests/test_pipelines_*.py).  Medians
-over interleaved rounds (LAL, pnrotor, call by call, case by case), with the range over rounds; the ratio is
-LAL / pnrotor.  The "waveform" columns are the share of pnrotor's time spent in its one waveform function
+Both codes give the same waveform within 2.4e-6 of its peak in every column (tests/test_pipelines_*.py).  Medians
+over interleaved rounds (LAL, pnrotor, call by call, case by case), with the range over rounds; the ratios are
+LAL / pnrotor of the medians, of wall time and of this process's CPU time (robust on a shared machine, where a
+call is often descheduled; it counts both of pnrotor's threads, :mod:`pnrotor.threads`, and LAL's one).  The "waveform" columns are the share of pnrotor's time spent in its one waveform function
 (:func:`pnrotor.interop.pipelines.polarizations`: evolve → modes → polarizations), the rest being the host's glue,
 conditioning and FFT.
 
-    python benchmarks/bench_pipelines.py [--rounds 7] [--cases NAME ...]
+    python benchmarks/bench_pipelines.py [--rounds 7] [--cases NAME ...] [--threads 1]
 """
 
 import argparse
@@ -61,8 +62,12 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--cases", nargs="+", default=DEFAULT_CASES)
+    ap.add_argument("--threads", type=int, help="pnrotor's threads per call (pnrotor.threads.limit; default numba's)")
     args = ap.parse_args()
     warnings.filterwarnings("ignore")
+    if args.threads:
+        from pnrotor import threads
+        threads.limit(args.threads)
 
     import astropy.units as u
     import pycbc.waveform as waveform
@@ -113,7 +118,8 @@ def main():
             return waveform.get_fd_waveform(approximant=approximant, **s["fd0"])
         return waveform.get_td_waveform(approximant=approximant, **s[kind])
 
-    times = {(name, kind, who): [] for name in args.cases for kind in CALLS for who in ("lal", "ours", "waveform")}
+    times = {(name, kind, who): [] for name in args.cases for kind in CALLS
+             for who in ("lal", "ours", "lal cpu", "ours cpu", "waveform")}
     for name in args.cases:   # warm up: compile or load every kernel, fill the caches of the hosts
         for kind in CALLS:
             call(name, kind, True)
@@ -123,10 +129,12 @@ def main():
             for kind in CALLS:
                 for lal in (True, False):
                     clock.spent = 0.0
-                    t = time.perf_counter()
+                    cpu, t = time.process_time(), time.perf_counter()
                     call(name, kind, lal)
                     elapsed = time.perf_counter() - t
-                    times[name, kind, "lal" if lal else "ours"].append(elapsed)
+                    who = "lal" if lal else "ours"
+                    times[name, kind, who].append(elapsed)
+                    times[name, kind, who + " cpu"].append(time.process_time() - cpu)
                     if not lal:
                         times[name, kind, "waveform"].append(clock.spent / elapsed)
 
@@ -135,21 +143,25 @@ def main():
         return statistics.median(values), min(values), max(values)
 
     print(f"LAL SpinTaylorT4 and pnrotor PNRotorT4 through PyCBC and gwsignal; dt = 1/4096 s, spin_order 6; "
-          f"median (min-max) of {args.rounds} interleaved rounds in ms; ratio LAL / pnrotor; wf: share of pnrotor's "
-          f"time in its waveform function")
+          f"pnrotor's threads: {args.threads or 'numba default'}; "
+          f"median (min-max) of {args.rounds} interleaved rounds in ms; ratio LAL / pnrotor of the medians, of wall "
+          f"and of CPU time (this process's, pnrotor's two threads counted); wf: share of pnrotor's wall time in its "
+          f"waveform function")
     titles = {"td0": "PyCBC get_td_waveform, amplitude order 0", "td3": "PyCBC get_td_waveform, amplitude order 3",
               "fd0": "PyCBC get_fd_waveform, amplitude order 0", "gwsignal": "gwsignal GenerateTDWaveform, 1.5PN"}
     for kind in CALLS:
         print(f"\n{titles[kind]}")
-        print(f"{'case':25s} {'samples':>8s} {'LAL':>22s} {'pnrotor':>22s} {'ratio':>6s} {'wf':>4s}")
-        ratios = []
+        print(f"{'case':25s} {'samples':>8s} {'LAL':>22s} {'pnrotor':>22s} {'ratio':>6s} {'cpu':>6s} {'wf':>4s}")
+        ratios, cpu_ratios = [], []
         for name in args.cases:
             lal, ours = median(name, kind, "lal"), median(name, kind, "ours")
             ratios.append(lal[0] / ours[0])
+            cpu_ratios.append(median(name, kind, "lal cpu")[0] / median(name, kind, "ours cpu")[0])
             print(f"{name:25s} {setups[name]['samples']:8d} {fmt(lal):>22s} {fmt(ours):>22s} {ratios[-1]:6.2f} "
-                  f"{100 * median(name, kind, 'waveform')[0]:3.0f}%")
-        print(f"LAL / pnrotor: median {statistics.median(ratios):.2f}, min {min(ratios):.2f}, max {max(ratios):.2f} "
-              f"(pnrotor faster in {sum(x > 1 for x in ratios)} of {len(ratios)} cases)")
+                  f"{cpu_ratios[-1]:6.2f} {100 * median(name, kind, 'waveform')[0]:3.0f}%")
+        for what, r in (("wall", ratios), ("cpu", cpu_ratios)):
+            print(f"LAL / pnrotor ({what}): median {statistics.median(r):.2f}, min {min(r):.2f}, max {max(r):.2f} "
+                  f"(pnrotor faster in {sum(x > 1 for x in r)} of {len(r)} cases)")
 
 
 def fmt(stats):
