@@ -92,6 +92,7 @@ def _failed(name, error):
 def td_waveform(name, **params):
     """(h₊, h×) as ``pycbc.types.TimeSeries`` of the approximant ``name`` (one of :data:`APPROXIMANTS`) for PyCBC's
     keywords ``params`` (module docstring)."""
+    import numpy as np
     from pycbc.types import TimeSeries
 
     try:
@@ -103,7 +104,8 @@ def td_waveform(name, **params):
     except (ValueError, TypeError) as error:
         raise _failed(name, error) from None
     delta_t = float(params["delta_t"])
-    return TimeSeries(hp, delta_t=delta_t, epoch=epoch), TimeSeries(hc, delta_t=delta_t, epoch=epoch)
+    return tuple(TimeSeries(np.ascontiguousarray(h, dtype=np.float64), delta_t=delta_t, epoch=epoch, copy=False)
+                 for h in (hp, hc))   # arrays of their own: no copy
 
 
 FLOOR = 1024.0
