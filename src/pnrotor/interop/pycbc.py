@@ -20,10 +20,11 @@ frequency (:func:`end_frequency`) for its sampling.  That route sets f_ref to f_
 Bad input raises PyCBC's ``FailedWaveformError`` with pnrotor's message; so do unmodelled physics with a
 non-default value (eccentricity, tides, testing-GR parameters, mode_array, frame_axis, modes_choice, numrel_data)
 and keywords that are neither PyCBC's parameters nor pnrotor's options.  Importing this module is cheap (PyCBC
-loads it at ``import pycbc.waveform``): PyCBC and numba are imported at the first waveform.
+loads it at ``import pycbc.waveform``): numba and pnrotor's PN code are imported at the first waveform.
 """
 
 import functools
+import numbers
 
 from pnrotor.interop import pipelines
 
@@ -41,7 +42,9 @@ dbeta1 …) must be 0."""
 
 
 def _leaves_out(value, allowed):
-    return any(value is a or (a is not None and isinstance(value, (int, float, str)) and value == a) for a in allowed)
+    """Whether ``value`` is one of ``allowed`` (numbers and text compared by value; a list or array never is)."""
+    return any(value is a or (a is not None and isinstance(value, (numbers.Number, str)) and value == a)
+               for a in allowed)
 
 
 SPINTAYLOR = ("amplitude_order", "phase_order", "spin_order", "dquad_mon1", "dquad_mon2")
