@@ -19,20 +19,21 @@ from pnrotor.waveform.layout import ell_m, mode_index
 MASSES = [(10.0, 10.0), (30.0, 10.0), (50.0, 5.0)]
 
 
-def mode_flux_series(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0)):
+def mode_flux_series(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0), tides=amplitudes.NO_TIDES):
     """(F̂ coefficients of v^j, of v^j ln v), j ≤ order2, from the amplitudes' own table with aligned spins
-    χᵢ = aᵢ ℓ̂: with H_ℓm = h₀ Σ_k v^k (A_k + B_k ln v), h₀ = 8√(π/5) ν v², the flux relative to
-    (32/5) ν² v¹⁰ is F̂ = (1/8) Σ_ℓm m² |Σ_k v^k (A_k + B_k ln v)|², exactly, as polynomials."""
+    χᵢ = aᵢ ℓ̂ (and ``tides`` as amplitudes.table takes them): with H_ℓm = h₀ Σ_k v^k (A_k + B_k ln v),
+    h₀ = 8√(π/5) ν v², the flux relative to (32/5) ν² v¹⁰ is F̂ = (1/8) Σ_ℓm m² |Σ_k v^k (A_k + B_k ln v)|²,
+    exactly, as polynomials."""
     M = m1 + m2
     X1, X2 = m1 / M, m2 / M
     spins = bool(a1 or a2)
-    rows, ks, qs, cs, parities = amplitudes.table(X1 * X2, X1 - X2, 8, order2, spins)
+    rows, ks, qs, cs, parities = amplitudes.table(X1 * X2, X1 - X2, 8, order2, spins, tides)
     q = np.zeros(amplitudes.N_Q)
     q[0] = 1.0
     q[2 + 2] = X1 * X1 * a1 + X2 * X2 * a2                                   # S_ell
     q[5 + 2] = X2 * a2 - X1 * a1                                             # Sigma_ell
     q[8 + 2] = kappa[0] * X1 * X1 * a1 * a1 + 2 * X1 * X2 * a1 * a2 + kappa[1] * X2 * X2 * a2 * a2   # P_ellell
-    A = np.zeros((len(ell_m(8)), 8), dtype=complex)
+    A = np.zeros((len(ell_m(8)), order2 + 1), dtype=complex)
     B = np.zeros_like(A)
     for row, k, qi, c, parity in zip(rows, ks, qs, cs, parities):   # m ≥ 0; H_ℓ,−m from parity (−1)^ℓ H*_ℓm
         ell, m = ell_m(8)[row]
@@ -43,11 +44,10 @@ def mode_flux_series(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0)):
                 A[r, k] += coef * q[qi]
     f, flog = np.zeros(order2 + 1), np.zeros(order2 + 1)
     for row, (_, m) in enumerate(ell_m(8)):
-        for k in range(8):
-            for kp in range(8):
-                if k + kp <= order2:
-                    f[k + kp] += m * m * (A[row, k] * np.conj(A[row, kp])).real / 8
-                    flog[k + kp] += m * m * 2 * (B[row, k] * np.conj(A[row, kp])).real / 8
+        for k in range(order2 + 1):
+            for kp in range(order2 + 1 - k):
+                f[k + kp] += m * m * (A[row, k] * np.conj(A[row, kp])).real / 8
+                flog[k + kp] += m * m * 2 * (B[row, k] * np.conj(A[row, kp])).real / 8
     return f, flog
 
 

@@ -30,7 +30,11 @@ Equations (units G = c = M = 1, t in units of M)
 
       TaylorT1: N = F̂, D = Ê′ evaluated as they are;
       TaylorT4: N = [F̂/Ê′] re-expanded and truncated, D = 1;
-      TaylorT5: N = 1, D = [Ê′/F̂] re-expanded and truncated (the inverse, Ajith 2011, arXiv:1107.1267).
+      TaylorT5: N = 1, D = [Ê′/F̂] re-expanded and truncated (the inverse, Ajith 2011, arXiv:1107.1267);
+
+  with neutron-star tides, the 5PN and 6PN tidal terms of Ê and F̂ (Vines et al. 2011) added to F̂ and Ê′ (T1)
+  or carried through the re-expansion to first order in Λᵢ (T4, T5), as LALSuite's SpinTaylor does
+  (:func:`_add_tides`).
 
 * Spins: χ̇ᵢ = Ωᵢ × χᵢ (:mod:`~pnrotor.pn.precession`).
 * Frame: dR/dt = ½ Ω R with ℓ̂ = R ẑ R⁻¹, n̂ = R x̂ R⁻¹ (Boyle 2016, arXiv:1604.08139,
@@ -86,7 +90,8 @@ from .flux import flux_series
 from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms, spin_orbit_precession,
                          spin_spin_precession_2pn, spin_spin_precession_3pn, spin_spin_precession_3pn_instantaneous,
                          varpi_coefficients)
-from .series import SERIES_SLOTS, divide, eval_at, eval_series, fold_and_store, shape_of, truncate, v_derivative
+from .series import (SERIES_SLOTS, divide, eval_at, eval_series, fold_and_store, multiply, shape_of, tidal_part, truncate,
+                     v_derivative)
 
 # ---------------------------------------------------------------------------------------------------
 # state layout
@@ -425,27 +430,71 @@ def events_aligned(t, y, p, g):
 APPROXIMANTS = ("T1", "T4", "T5")
 
 
-def vdot_series(X1, approximant, kmax, kappa1=1.0, kappa2=1.0):
+def vdot_series(X1, approximant, kmax, kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0):
     """(N, D, Ê′) series of v̇ = (32ν/5) v⁹ N/D for the approximant, truncated by ``kmax``."""
     if approximant not in APPROXIMANTS:
         raise ValueError(f"approximant must be one of {APPROXIMANTS}, got {approximant!r}")
-    return _vdot_series(energy_series(X1, kappa1, kappa2), flux_series(X1, kappa1, kappa2), kmax,
-                        APPROXIMANTS.index(approximant))
+    return _vdot_series(energy_series(X1, kappa1, kappa2, lambda1, lambda2),
+                        flux_series(X1, kappa1, kappa2, lambda1, lambda2), kmax, APPROXIMANTS.index(approximant))
 
 
 @njit(cache=True)
 def _vdot_series(E_raw, F_raw, kmax, approx):
-    """(N, D, Ê′) from the untruncated Ê and F̂; approx 0, 1, 2 = T1, T4, T5 (module docstring)."""
-    E = truncate(E_raw.copy(), kmax)
+    """(N, D, Ê′) from the untruncated Ê and F̂; approx 0, 1, 2 = T1, T4, T5 (module docstring).  The tidal terms
+    of Ê and F̂ (k ≥ TIDAL_K, kept to kmax[3]) are added by :func:`_add_tides`."""
+    E = truncate(E_raw.copy(), kmax)   # the point-particle and spin terms (k ≤ 9: no tidal term is kept)
     Ep = energy_derivative_series(E)   # the derivative keeps the powers of v, so it stays truncated
     F = truncate(F_raw.copy(), kmax)
     one = np.zeros_like(E)
     one[0, 0, 0] = 1.0
     if approx == 0:
-        return F, Ep, Ep.copy()
-    if approx == 1:
-        return divide(F, Ep, kmax), one, Ep
-    return one, divide(Ep, F, kmax), Ep
+        N, D = F, Ep.copy()
+    elif approx == 1:
+        N, D = divide(F, Ep, kmax[:3]), one
+    else:
+        N, D = one, divide(Ep, F, kmax[:3])
+    _add_tides(E_raw, F_raw, kmax, approx, N, D, Ep)
+    return N, D, Ep
+
+
+@njit(cache=True)
+def _add_tides(E_raw, F_raw, kmax, approx, N, D, Ep):
+    """Add the tidal terms of E_raw and F_raw (TIDAL_K ≤ k ≤ kmax[3], linear in Λ, b = 0) to N, D and Ê′ in place;
+    nothing without any (the point-particle series then stay bitwise as they were).
+
+    T1 adds them to F̂ and Ê′ as they are.  T4 and T5 re-expand the ratio to first order in Λ, every tidal term
+    kept to kmax[3] whatever the point-particle order: with Q = F̂/Ê′ (T4), Q_tidal = (F̂_t − Q_pp Ê′_t)/Ê′_pp,
+    and the same with F̂ and Ê′ exchanged for T5.  Only the point-particle terms up to v² reach k ≤ 12 times a tidal
+    term (there are no spin terms below v³), so Q_pp and Ê′_pp are taken at 1PN, without spins: LALSuite's
+    fixed SpinTaylorT4 and T5 tidal coefficients (``XLALSimInspiralTaylorT4wdot_1{0,2}PNTidalCoeff``,
+    ``XLALSimInspiralTaylorT2dtdv_1{0,2}PNTidalCoeff``), which tests/test_pn_tides.py checks these against."""
+    Et, any_e = tidal_part(E_raw, kmax)
+    Ft, any_f = tidal_part(F_raw, kmax)
+    if not (any_e or any_f):
+        return
+    Ept = energy_derivative_series(Et)
+    k1 = np.array([2, -1, -1, -1], dtype=np.int64)   # 1PN, no spins
+    kt = np.array([kmax[3], -1, -1, kmax[3]], dtype=np.int64)
+    Ep1 = energy_derivative_series(truncate(E_raw.copy(), k1))
+    F1 = truncate(F_raw.copy(), k1)
+    if approx == 0:
+        _accumulate(N, Ft)
+        _accumulate(D, Ept)
+    elif approx == 1:
+        _accumulate(N, divide(Ft - multiply(divide(F1, Ep1, k1), Ept, kt), Ep1, kt))
+    else:
+        _accumulate(D, divide(Ept - multiply(divide(Ep1, F1, k1), Ft, kt), F1, kt))
+    _accumulate(Ep, Ept)
+
+
+@njit(cache=True)
+def _accumulate(C, T):
+    """C += T where T has a term (adding the zeros would turn C's −0.0 into 0.0)."""
+    for k in range(C.shape[0]):
+        for b in range(C.shape[1]):
+            for l in range(C.shape[2]):
+                if T[k, b, l] != 0.0:
+                    C[k, b, l] += T[k, b, l]
 
 
 @njit(cache=True)
@@ -507,8 +556,8 @@ def _past_end(events, y, p, values, v):
                 and values[EV_VDOT_PEAK] > 0.0)
 
 
-def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, v_end=1.0,
-                    spin_tol=SPIN_TOL, rotor="coprecessing", phase_shift=False, aligned_basis=None,
+def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0,
+                    v_end=1.0, spin_tol=SPIN_TOL, rotor="coprecessing", phase_shift=False, aligned_basis=None,
                     omega_l="torque", basis=None, v_check=None):
     """Build the parameter vector p.
 
@@ -523,7 +572,7 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     """
     head, N, D, Ep = _spin_independent_parts(
         (X1, approximant, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
-         math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), rotor, bool(phase_shift), omega_l))
+         math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), lambda1, lambda2, rotor, bool(phase_shift), omega_l))
     p = np.zeros(P_SIZE)
     p[:P_NUM] = head
     p[P_VEND] = v_end
@@ -557,20 +606,21 @@ def start_rows(heads, N, D, Ep, rows, bases, fold, v_end, spin_tol, c_addr, jit_
 @functools.lru_cache(maxsize=64)
 def _spin_independent_parts(key):
     """:func:`spin_independent_parts` of one binary, ``key`` = (X1, approximant, kmax as a tuple, so_order,
-    ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives other signed zeros), rotor, phase_shift,
+    ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives other signed zeros), Λ₁, Λ₂, rotor, phase_shift,
     omega_l), as (p head, N, D, Ê′), kept in a small LRU cache (repeated runs of one binary, or of one mass
     ratio, skip its ~65 µs of Python; code that replaces a coefficient function must call
     ``_spin_independent_parts.cache_clear()``).  The arrays are shared: make_parameters copies the head and only
     reads the series."""
-    X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, _, _, rotor, phase_shift, omega_l = key
+    X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, _, _, lambda1, lambda2, rotor, phase_shift, omega_l = key
     p, N, D, Ep = spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor,
-                                         phase_shift, omega_l)
+                                         phase_shift, omega_l, lambda1, lambda2)
     return p[0], N[0], D[0], Ep[0]
 
 
-def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor, phase_shift, omega_l):
+def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor, phase_shift, omega_l,
+                           lambda1=0.0, lambda2=0.0):
     """Everything :func:`make_parameters` (and :func:`start_rows`) builds that does not depend on the spins or
-    v_end, for n binaries that share the options and differ in X1, κ₁, κ₂ (arrays (n,), or floats for one
+    v_end, for n binaries that share the options and differ in X1, κ₁, κ₂, Λ₁, Λ₂ (arrays (n,), or floats for one
     binary): (heads (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
     :func:`vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
     binary, against ~65 µs of Python floats for one, measured; 85 µs before the imports left the function and
@@ -618,7 +668,7 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     p[P_L2] = L2 if inc["so_nlo"] else 0.0
     p[P_L4] = L4 if inc["so_nnlo"] else 0.0
     p[P_DEN_EPS] = DEN_EPS
-    E, F = energy_series(X1, kappa1, kappa2), flux_series(X1, kappa1, kappa2)
+    E, F = energy_series(X1, kappa1, kappa2, lambda1, lambda2), flux_series(X1, kappa1, kappa2, lambda1, lambda2)
     kmax, approx = np.array(kmax, dtype=np.int64), APPROXIMANTS.index(approximant)
     if not shape_of(X1):   # one binary (evolve): _vdot_series_each would cost 3.5 s more to compile, cold
         return (p[None],) + tuple(x[None] for x in _vdot_series(E, F, kmax, approx))
@@ -655,14 +705,14 @@ def _copy(src, dst):
 _UNIT_BASIS = np.array([1.0, 0, 0, 0, 0, 0, 0, 0, 0])
 
 
-def inspiral_end(X1, approximant, kmax, basis, kappa1=1.0, kappa2=1.0):
+def inspiral_end(X1, approximant, kmax, basis, kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0):
     """The smallest v at which one of the events 1, 2, 5, 6 (module docstring) reaches zero with the spin
     invariants fixed at ``basis``: where an inspiral from low frequency ends (for precessing spins, as far
     as the spins at the start decide it), or 1.0 if none does below v = 1.  Found on a grid of 2000 values
     of v in [10⁻³, 1] and refined by bisection to 1e-12."""
     from .series import evaluate
 
-    N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2)
+    N, D, Ep = vdot_series(X1, approximant, kmax, kappa1, kappa2, lambda1, lambda2)
     Nv, Dv = v_derivative(N), v_derivative(D)
 
     def smallest(v):
