@@ -67,6 +67,35 @@ def test_nonspinning_modes_carry_the_pn_flux_through_3_5pn(m1, m2):
     np.testing.assert_allclose(flog, glog, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("m1, m2", [(10.0, 10.0), (1.4, 1.4)])
+def test_equal_mass_modes_carry_the_pn_flux_through_4pn(m1, m2):
+    """The 4PN (2,2) term (Blanchet et al. 2023) with every other mode: at equal masses, where the odd-m modes vanish,
+    every mode that reaches v⁸ of the flux is known (the 3.5PN terms of (2,1), (3,1), (3,3) that unequal masses need
+    are not in the tables), so F̂ is reproduced through v⁸ with its logarithms, Blanchet et al. 2023's 4PN flux."""
+    f, flog = mode_flux_series(m1, m2, 8)
+    g, glog = pn_flux_coefficients(m1, m2, 8)
+    np.testing.assert_allclose(f, g, rtol=0, atol=1e-12 * np.abs(g).max())
+    np.testing.assert_allclose(flog, glog, rtol=0, atol=1e-12 * np.abs(glog).max())
+
+
+def test_flux_in_the_test_mass_limit_is_black_hole_perturbation_theory():
+    """ν → 0 of F̂ through 4.5PN against the flux of a particle on a circular orbit of a Schwarzschild black hole:
+    Tagoshi & Sasaki 1994 (gr-qc/9405062) through v⁸ and Tanaka, Tagoshi & Sasaki 1996 (gr-qc/9602038) at v⁹,
+    written as they are (γ, ln 2, ln 3 and ln v apart), an independent computation of the ν⁰ terms that
+    Blanchet et al. 2023's 4PN and 4.5PN flux must reduce to."""
+    g, pi, l2, l3 = 0.5772156649015329, np.pi, np.log(2.0), np.log(3.0)
+    bhpt = {0: (1, 0), 2: (-1247 / 336, 0), 3: (4 * pi, 0), 4: (-44711 / 9072, 0), 5: (-8191 / 672 * pi, 0),
+            6: (6643739519 / 69854400 - 1712 / 105 * g + 16 / 3 * pi ** 2 - 3424 / 105 * l2, -1712 / 105),
+            7: (-16285 / 504 * pi, 0),
+            8: (-323105549467 / 3178375200 + 232597 / 4410 * g - 1369 / 126 * pi ** 2 + 39931 / 294 * l2
+                - 47385 / 1568 * l3, 232597 / 4410),
+            9: (265978667519 / 745113600 * pi - 6848 / 105 * pi * g - 13696 / 105 * pi * l2, -6848 / 105 * pi)}
+    f, flog = flux.nonspinning_flux_coefficients(0.0)
+    for k in range(10):
+        c, c_log = bhpt.get(k, (0, 0))
+        assert f[k] == pytest.approx(c, rel=1e-14, abs=1e-14) and flog[k] == pytest.approx(c_log, rel=1e-14, abs=0)
+
+
 @pytest.mark.parametrize("m1, m2", MASSES)
 @pytest.mark.parametrize("kappa", [(1.0, 1.0), (3.0, 6.0)])
 def test_aligned_spin_modes_carry_the_spin_orbit_and_spin_spin_flux(m1, m2, kappa):

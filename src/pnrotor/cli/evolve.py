@@ -104,7 +104,7 @@ def add_parser(subparsers):
                        "(--sampling 1/4096 or per_orbit:16): the default steps are far apart")
     waves.add_argument("--ell-max", type=int, metavar="L", help=f"modes l = 2 ... L, L <= 8 (default {ELL_MAX})")
     waves.add_argument("--amplitude-order", type=float, metavar="A",
-                       help=f"PN amplitude order 0, 0.5, ..., 3.5 (default {AMPLITUDE_ORDER})")
+                       help=f"PN amplitude order 0, 0.5, ..., 4 (default {AMPLITUDE_ORDER})")
     waves.add_argument("--distance", type=float, metavar="MPC",
                        help="store the modes as strain at this distance in Mpc (default: r h / M)")
     output.add_argument("-q", "--quiet", action="store_true",

@@ -188,8 +188,8 @@ def check_arguments(ell_max, amplitude_order, distance=None):
         order2 = 2.0 * float(amplitude_order) if _real(amplitude_order) else math.nan   # no str, bytes or bools
     except OverflowError:   # an int beyond any float (10**400)
         order2 = math.nan
-    if not order2 in range(8):
-        raise ValueError(f"amplitude_order must be one of 0, 0.5, ..., 3.5; got {amplitude_order!r}")
+    if not order2 in range(9):
+        raise ValueError(f"amplitude_order must be one of 0, 0.5, ..., 4; got {amplitude_order!r}")
     return int(ell_max), int(order2), None if distance is None else _megaparsecs(distance)
 
 
@@ -238,7 +238,7 @@ def _inertial(evolution, ell_max, order2, scale, tides):
 
 def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None, tidal_order=None):
     """Inertial-frame modes h_ℓm of ``evolution`` (module docstring) for ℓ ≤ ``ell_max`` (2 … 8) with
-    amplitude terms through ``amplitude_order`` (0 … 3.5 in steps of 0.5), as strain at ``distance``
+    amplitude terms through ``amplitude_order`` (0 … 4 in steps of 0.5; the 4PN term is (2,2)'s), as strain at ``distance``
     (Mpc or an astropy length) or, without one, as r h / M.  For a run with tidal deformabilities, the tidal
     amplitude terms (:mod:`pnrotor.waveform.tidal`) to ``tidal_order`` (0: none, 5 or 6; None: the run's
     tidal order).  Returns :class:`Modes`."""
