@@ -214,7 +214,7 @@ def _tides(inputs, tidal_order):
     return (*lambdas, int(2 * order)) if order and any(lambdas) else (0.0, 0.0, -1)
 
 
-def _inertial(evolution, ell_max, order2, scale, tides):
+def _inertial(evolution, ell_max, order2, scale, tides, memory):
     """h = 𝔇(R) H times ``scale``, in one pass of the amplitude kernel.  For a nonprecessing run the spins are
     constant along ℓ̂ (folded into the coefficients) and R = R₀ exp(Φẑ/2) with R₀ the initial frame, so in the
     default frame (R₀ = 1) h = H e^{−imΦ} (frame "z")."""
@@ -233,26 +233,32 @@ def _inertial(evolution, ell_max, order2, scale, tides):
         if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]):
             frame = "z"
     return modes_in_frame(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
-                          inputs["kappa1"], inputs["kappa2"], R=evolution.R, frame=frame, scale=scale, tides=tides)
+                          inputs["kappa1"], inputs["kappa2"], R=evolution.R, frame=frame, scale=scale, tides=tides,
+                          memory=memory)
 
 
-def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None, tidal_order=None):
+def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None, tidal_order=None, memory=False):
     """Inertial-frame modes h_ℓm of ``evolution`` (module docstring) for ℓ ≤ ``ell_max`` (2 … 8) with
     amplitude terms through ``amplitude_order`` (0 … 4 in steps of 0.5; the 4PN term is (2,2)'s), as strain at ``distance``
     (Mpc or an astropy length) or, without one, as r h / M.  For a run with tidal deformabilities, the tidal
     amplitude terms (:mod:`pnrotor.waveform.tidal`) to ``tidal_order`` (0: none, 5 or 6; None: the run's
-    tidal order).  Returns :class:`Modes`."""
+    tidal order).  ``memory=True`` adds the nonlinear memory to the m = 0 modes (Favata 2009's closed form to
+    the amplitude order, at most 3PN: :mod:`pnrotor.waveform.memory`, which states its convention for the
+    start of the run: the memory accumulated since t → −∞).  Returns :class:`Modes`."""
     if not isinstance(evolution, Evolution):
         raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads), got "
                         f"{type(evolution).__name__}")
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
+    if not isinstance(memory, (bool, np.bool_)):
+        raise ValueError(f"memory must be True or False, got {memory!r}")
     inputs = evolution.inputs
     tides = _tides(inputs, tidal_order)
     _check_memory(n_modes(ell_max), len(evolution), "modes()")
     scale = 1.0 if distance_Mpc is None else _scale(None, distance_Mpc, inputs["M_seconds"])
-    h = _inertial(evolution, ell_max, order2, scale, tides)
+    h = _inertial(evolution, ell_max, order2, scale, tides, bool(memory))
     return Modes(t=evolution.t, t_seconds=evolution.t_seconds, ell_max=ell_max, data=h, frame="inertial",
                  R=evolution.R, Phi=evolution.Phi, distance_Mpc=distance_Mpc,
                  inputs=dict(inputs, ell_max=ell_max, amplitude_order=order2 / 2,
                              distance_Mpc=np.nan if distance_Mpc is None else distance_Mpc,
-                             **({"tidal_amplitude_order": tides[2] / 2} if tides[2] > 0 else {})))
+                             **({"tidal_amplitude_order": tides[2] / 2} if tides[2] > 0 else {}),
+                             **({"memory": True} if memory else {})))
