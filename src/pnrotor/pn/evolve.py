@@ -52,6 +52,7 @@ from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STAT
 from . import initial as _ini
 from . import system as _sys
 from .sampling import compile_output_kernel, sample
+from .flux import horizon_flux
 from .series import basis_values, kmax_from_orders
 from .settings import normalize_approximant, settings
 
@@ -186,9 +187,22 @@ def build_system(s):
         s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
         kappa2=s.kappa2, lambda1=s.lambda1, lambda2=s.lambda2, v_end=s.v_max, spin_tol=_sys.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
         phase_shift=s.precession_phase_shift,
-        aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0)
+        aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
+        horizon=_horizon(s, bvals))
     _check_start(s, kmax, bvals, *at_v0, _sys.earlier_end(*events.addresses, y0, p))
     return System(rhs, events, p, y0, kmax, bvals)
+
+
+def _horizon(s, bvals):
+    """{k: c} of the flux into both horizons (:func:`pnrotor.pn.flux.horizon_flux`) with ``horizon_absorption``
+    (nonspinning or aligned spins, ℓ̂·χᵢ = bvals[1], bvals[2]), else None."""
+    if not s.horizon_absorption:
+        return None
+    out = {}
+    for X, a in ((s.X1, bvals[1]), (1.0 - s.X1, bvals[2])):
+        for k, c in horizon_flux(X, a).items():
+            out[k] = out.get(k, 0.0) + c
+    return out
 
 
 def kmax_of(s):
@@ -360,7 +374,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
            spin_orbit_order=None, spin_spin_order=None, ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0),
            kappa1=1.0, kappa2=1.0, atol=1e-12, rtol=0.0, sampling="steps", rotor="coprecessing",
            precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000,
-           lambda1=0.0, lambda2=0.0, tidal_order=None):
+           lambda1=0.0, lambda2=0.0, tidal_order=None, horizon_absorption=False):
     r"""Evolve a quasi-circular (precessing) compact binary in post-Newtonian theory.
 
     Parameters
@@ -421,6 +435,12 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     tidal_order : {None, 0, 5, 6}
         PN order of the tidal terms: 0 none, 5 the leading ones, 6 with their 1PN corrections (None: 6), kept
         whatever ``pn_order`` is, as LALSuite's tideO.
+    horizon_absorption : bool
+        Add the energy flux into black-hole horizons (Alvi 2001 at leading order in the tidal coupling, exact in
+        the spins: relative 2.5PN with spins, 4PN without; :func:`pnrotor.pn.flux.horizon_flux`) to the energy
+        balance, at first order in it, whatever ``pn_order`` is.  For nonspinning binaries and spins along ℓ̂
+        (a ValueError for precessing ones); the spins' and masses' own change by the absorbed angular momentum
+        and energy is not followed (the aligned state holds the spins constant).  LALSuite has no such option.
 
     Returns
     -------
@@ -431,7 +451,8 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
                  spin_orbit_order=spin_orbit_order, spin_spin_order=spin_spin_order, ell_hat=ell_hat, n_hat=n_hat,
                  kappa1=kappa1, kappa2=kappa2, atol=atol, rtol=rtol, sampling=sampling, rotor=rotor,
                  precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
-                 precession=precession, max_steps=max_steps, lambda1=lambda1, lambda2=lambda2, tidal_order=tidal_order)
+                 precession=precession, max_steps=max_steps, lambda1=lambda1, lambda2=lambda2, tidal_order=tidal_order,
+                 horizon_absorption=horizon_absorption)
     system = build_system(s)
     compile_output_kernel(s)
     inputs = s.inputs()

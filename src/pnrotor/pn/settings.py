@@ -75,6 +75,7 @@ class Settings:
     integrate_rotor: bool
     precession: str
     max_steps: int
+    horizon_absorption: bool
     M_sec: float
     X1: float
     nu: float
@@ -105,6 +106,7 @@ class Settings:
             "sampling_value": nan if self.sampling_value is None else float(self.sampling_value),
             "rotor": self.rotor, "precession_phase_shift": bool(self.precession_phase_shift),
             "integrate_rotor": bool(self.integrate_rotor), "precession": self.precession,
+            "horizon_absorption": bool(self.horizon_absorption),
             "max_steps": int(self.max_steps), "M_seconds": self.M_sec, "v_ref": self.v0,
             "spin_content": self.spin_content, "state": "aligned" if self.use_aligned else "precessing",
         }
@@ -129,21 +131,23 @@ class Options(NamedTuple):
     integrate_rotor: bool
     precession: str
     max_steps: int
+    horizon_absorption: bool = False
 
 
 def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, spin_orbit_order,
              spin_spin_order, ell_hat, n_hat, kappa1, kappa2, atol, rtol, sampling, rotor, precession_phase_shift,
-             integrate_rotor, precession, max_steps, lambda1=0.0, lambda2=0.0, tidal_order=None):
+             integrate_rotor, precession, max_steps, lambda1=0.0, lambda2=0.0, tidal_order=None,
+             horizon_absorption=False):
     """Check and convert :func:`pnrotor.pn.evolve.evolve`'s arguments (its docstring has their meaning and
     defaults) → :class:`Settings`; a ``ValueError`` naming the first bad one (the options first)."""
     o = options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, sampling, rotor,
-                precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order)
+                precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order, horizon_absorption)
     return binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1,
                            lambda2)
 
 
 def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, sampling, rotor,
-            precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order=None):
+            precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order=None, horizon_absorption=False):
     """:class:`Options` from ``evolve``'s keywords of the same names; a ``ValueError`` naming the first bad one."""
     approximant = normalize_approximant(approximant)
     pn_order = _order(pn_order, "pn_order", 0.0, MAX_ORDER)
@@ -172,8 +176,10 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
         precession_phase_shift = False
     if precession_phase_shift is None:
         precession_phase_shift = so_order >= 3.0
+    if not isinstance(horizon_absorption, _ini._BOOLS):
+        raise ValueError(f"horizon_absorption must be True or False, got {horizon_absorption!r}")
     return Options(approximant, pn_order, so_order, ss_order, tidal_order, atol, rtol, mode, sval, rotor,
-                   precession_phase_shift, integrate_rotor, precession, int(max_steps))
+                   precession_phase_shift, integrate_rotor, precession, int(max_steps), bool(horizon_absorption))
 
 
 def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1=0.0,
@@ -190,6 +196,10 @@ def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, 
     lambda2 = _lambda(lambda2, "lambda2")
     M_sec, X1, v0, v_min, v_max = frequencies(m1, m2, f_ref, f_min, f_max)
     spin_content, c1, c2 = _spin_content(c1, c2, ell)
+    if o.horizon_absorption and (spin_content == "precessing" or o.integrate_rotor):
+        raise ValueError("horizon_absorption takes nonspinning binaries and spins along ell_hat (the flux into a "
+                         "tilted horizon, averaged over the orbit, is not implemented); these spins precess"
+                         if spin_content == "precessing" else "horizon_absorption needs integrate_rotor=False")
     return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, ell, n, kappa1, kappa2, lambda1, lambda2, *o, M_sec, X1,
                     X1 * (1.0 - X1), v0, v_min, v_max, _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
 

@@ -558,7 +558,7 @@ def _past_end(events, y, p, values, v):
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0,
                     v_end=1.0, spin_tol=SPIN_TOL, rotor="coprecessing", phase_shift=False, aligned_basis=None,
-                    omega_l="torque", basis=None, v_check=None):
+                    omega_l="torque", basis=None, v_check=None, horizon=None):
     """Build the parameter vector p.
 
     ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
@@ -567,6 +567,8 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′, event 6) at
     v_check) instead of p, for checking the initial point.
     ``spin_tol``: how far |χᵢ|² may exceed 1 before events 3/4 end the run (:func:`spin_tolerance`).
+    ``horizon``: {k: c} of the flux into the horizons F̂_H (:func:`pnrotor.pn.flux.horizon_flux`, aligned runs),
+    added to the energy balance at first order: F̂ + F̂_H in N (T1, T4), D − F̂_H (T5, D = Ê′/F̂ re-expanded).
     Everything but v_end, spin_tol and the stored series comes from :func:`_spin_independent_parts` (cached).
     :func:`start_rows` builds the same p for many binaries at once.
     """
@@ -579,6 +581,13 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     p[P_SPINTOL] = spin_tol
     fold = aligned_basis is not None
     b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
+    if horizon:
+        N, D = N.copy(), D.copy()   # the cached series are shared
+        for k, c in horizon.items():
+            if approximant == "T5":
+                D[k, 0, 0] -= c
+            else:
+                N[k, 0, 0] += c
     at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
     return p if v_check is None else (p, at_v)
 
