@@ -190,10 +190,10 @@ def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, 
     c1 = _ini.spin_vector(chi1, "chi1")
     c2 = _ini.spin_vector(chi2, "chi2")
     ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
-    kappa1 = _kappa(kappa1, "kappa1")
-    kappa2 = _kappa(kappa2, "kappa2")
-    lambda1 = _lambda(lambda1, "lambda1")
-    lambda2 = _lambda(lambda2, "lambda2")
+    kappa1 = _nonnegative(kappa1, "kappa1", _KAPPA)
+    kappa2 = _nonnegative(kappa2, "kappa2", _KAPPA)
+    lambda1 = _nonnegative(lambda1, "lambda1", _LAMBDA)
+    lambda2 = _nonnegative(lambda2, "lambda2", _LAMBDA)
     M_sec, X1, v0, v_min, v_max = frequencies(m1, m2, f_ref, f_min, f_max)
     spin_content, c1, c2 = _spin_content(c1, c2, ell)
     if o.horizon_absorption and (spin_content == "precessing" or o.integrate_rotor):
@@ -319,22 +319,16 @@ def _tidal_order(x):
     return value
 
 
-def _lambda(value, name):
-    """A dimensionless tidal deformability Λ: a finite number ≥ 0 (0 for a black hole)."""
+_KAPPA = "1 for a black hole, ~2-20 for neutron stars"
+_LAMBDA = "the dimensionless tidal deformability: 0 for a black hole, ~10-5000 for neutron stars"
+
+
+def _nonnegative(value, name, meaning):
+    """A finite number ≥ 0: κᵢ (``meaning`` :data:`_KAPPA`) or Λᵢ (:data:`_LAMBDA`)."""
     x = _float_or_nan(value)
     if not (math.isfinite(x) and x >= 0.0):
-        raise ValueError(f"{name} must be a finite number >= 0 (the dimensionless tidal deformability: 0 for a black "
-                         f"hole, ~10-5000 for neutron stars), got {value!r}")
+        raise ValueError(f"{name} must be a finite number >= 0 ({meaning}), got {value!r}")
     return x
-
-
-def _kappa(kappa, name):
-    """A spin-induced quadrupole parameter κ: a finite number ≥ 0 (1 for black holes)."""
-    value = _float_or_nan(kappa)
-    if not (math.isfinite(value) and value >= 0.0):
-        raise ValueError(f"{name} must be a finite number >= 0 (1 for a black hole, ~2-20 for neutron stars), "
-                         f"got {kappa!r}")
-    return value
 
 
 def masses_and_frequencies(m1, m2, f_ref, f_min, f_max):
