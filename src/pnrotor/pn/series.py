@@ -37,8 +37,8 @@ k and the spin power.
 
 Tidal terms (linear in the deformabilities Λᵢ, spin-independent, b = 0) are the terms with k ≥ TIDAL_K = 10:
 no point-particle term reaches that power, so the rule above (k ≤ kmax[0] ≤ 9) drops them, and a fourth entry
-``kmax[3]`` (the tidal order × 2, or −1) keeps them separately: :func:`tidal_part` takes them out of a series
-and :func:`pnrotor.pn.system._vdot_series` carries them through the approximants' ratios to first order in Λ.
+``kmax[3]`` (the tidal order × 2, or −1) keeps them separately: :func:`pnrotor.pn.system._add_tides` carries them
+through the approximants' ratios to first order in Λ.
 
 The logarithm ln v is treated as an O(1) number (its coefficient is part of the v^k coefficient), the
 convention of LALSuite's TaylorT4 and of PostNewtonian.jl's ``truncated_series_ratio``.  Products of
@@ -136,24 +136,15 @@ def add_spin_spin(C, X1, X2, per_body_1, per_body_2, s1s2):
 def add_tidal(C, X1, X2, lambda1, lambda2, per_body):
     """Add the tidal terms Σᵢ Λᵢ c_k(Xᵢ) v^k to C (b = 0; arrays X1, Λ: one binary each, elementwise), from
     ``per_body(X)`` → {k: c_k} per unit dimensionless deformability Λ of the body of mass fraction X
-    (:func:`pnrotor.pn.energy.tidal_energy`, :func:`pnrotor.pn.flux.tidal_flux`)."""
+    (:func:`pnrotor.pn.energy.tidal_energy`, :func:`pnrotor.pn.flux.tidal_flux`); one binary without tides
+    skips them (its ~10 µs; adding the zeros would give the same numbers)."""
+    if not (shape_of(X1) or lambda1 or lambda2):
+        return C
     for k, c in per_body(X1).items():
         C[k, B_ONE, 0] += lambda1 * c
     for k, c in per_body(X2).items():
         C[k, B_ONE, 0] += lambda2 * c
     return C
-
-
-@njit(cache=True)
-def tidal_part(C, kmax):
-    """The tidal terms of C (b = 0, TIDAL_K ≤ k ≤ kmax[3]) as a new series, and whether there are any."""
-    T = np.zeros_like(C)
-    any_term = False
-    for k in range(TIDAL_K, min(C.shape[0], kmax[3] + 1)):
-        for l in range(C.shape[2]):
-            T[k, B_ONE, l] = C[k, B_ONE, l]
-            any_term = any_term or C[k, B_ONE, l] != 0.0
-    return T, any_term
 
 
 def kmax_from_orders(pn_order, so_order, ss_order, tidal_order=0.0):
@@ -215,12 +206,9 @@ def _accumulate_product(out, A, B, ka, kb, sign):
 
 @njit(cache=True)
 def _top(kmax):
-    """The highest power of v that ``kmax`` keeps of any term (a series' higher powers are not computed: products
-    of two logarithms first occur at v¹², past the point-particle orders)."""
-    top = -1
-    for j in range(kmax.shape[0]):
-        top = max(top, kmax[j])
-    return min(top, NK - 1)
+    """The highest power of v that ``kmax`` keeps of any spin power (what :func:`truncate` reads; a series' higher
+    powers are not computed: products of two logarithms first occur at v¹², past the point-particle orders)."""
+    return min(max(kmax[0], kmax[1], kmax[2]), NK - 1)
 
 
 @njit(cache=True)

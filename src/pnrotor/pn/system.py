@@ -90,7 +90,7 @@ from .flux import flux_series
 from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms, spin_orbit_precession,
                          spin_spin_precession_2pn, spin_spin_precession_3pn, spin_spin_precession_3pn_instantaneous,
                          varpi_coefficients)
-from .series import (SERIES_SLOTS, divide, eval_at, eval_series, fold_and_store, multiply, shape_of, tidal_part, truncate,
+from .series import (SERIES_SLOTS, TIDAL_K, divide, eval_at, eval_series, fold_and_store, shape_of, truncate,
                      v_derivative)
 
 # ---------------------------------------------------------------------------------------------------
@@ -434,14 +434,17 @@ def vdot_series(X1, approximant, kmax, kappa1=1.0, kappa2=1.0, lambda1=0.0, lamb
     """(N, D, Ê′) series of v̇ = (32ν/5) v⁹ N/D for the approximant, truncated by ``kmax``."""
     if approximant not in APPROXIMANTS:
         raise ValueError(f"approximant must be one of {APPROXIMANTS}, got {approximant!r}")
-    return _vdot_series(energy_series(X1, kappa1, kappa2, lambda1, lambda2),
-                        flux_series(X1, kappa1, kappa2, lambda1, lambda2), kmax, APPROXIMANTS.index(approximant))
+    E, F = energy_series(X1, kappa1, kappa2, lambda1, lambda2), flux_series(X1, kappa1, kappa2, lambda1, lambda2)
+    approx = APPROXIMANTS.index(approximant)
+    N, D, Ep = _vdot_series(E, F, kmax, approx)
+    _add_tides(E, F, kmax, approx, N, D, Ep)
+    return N, D, Ep
 
 
 @njit(cache=True)
 def _vdot_series(E_raw, F_raw, kmax, approx):
-    """(N, D, Ê′) from the untruncated Ê and F̂; approx 0, 1, 2 = T1, T4, T5 (module docstring).  The tidal terms
-    of Ê and F̂ (k ≥ TIDAL_K, kept to kmax[3]) are added by :func:`_add_tides`."""
+    """(N, D, Ê′) from the untruncated Ê and F̂; approx 0, 1, 2 = T1, T4, T5 (module docstring), without their tidal
+    terms (k ≥ TIDAL_K), which :func:`_add_tides` adds."""
     E = truncate(E_raw.copy(), kmax)   # the point-particle and spin terms (k ≤ 9: no tidal term is kept)
     Ep = energy_derivative_series(E)   # the derivative keeps the powers of v, so it stays truncated
     F = truncate(F_raw.copy(), kmax)
@@ -450,51 +453,58 @@ def _vdot_series(E_raw, F_raw, kmax, approx):
     if approx == 0:
         N, D = F, Ep.copy()
     elif approx == 1:
-        N, D = divide(F, Ep, kmax[:3]), one
+        N, D = divide(F, Ep, kmax), one
     else:
-        N, D = one, divide(Ep, F, kmax[:3])
-    _add_tides(E_raw, F_raw, kmax, approx, N, D, Ep)
+        N, D = one, divide(Ep, F, kmax)
     return N, D, Ep
 
 
-@njit(cache=True)
 def _add_tides(E_raw, F_raw, kmax, approx, N, D, Ep):
-    """Add the tidal terms of E_raw and F_raw (TIDAL_K ≤ k ≤ kmax[3], linear in Λ, b = 0) to N, D and Ê′ in place;
-    nothing without any (the point-particle series then stay bitwise as they were).
+    """Add the tidal terms of E_raw and F_raw (b = 0, TIDAL_K ≤ k ≤ kmax[3], linear in Λ, no logarithm) to N, D and
+    Ê′ in place: series of one binary (NK, NB, NL), or of n binaries, n first (numpy, elementwise: each binary's
+    numbers are those of a call with its own series).
 
     T1 adds them to F̂ and Ê′ as they are.  T4 and T5 re-expand the ratio to first order in Λ, every tidal term
-    kept to kmax[3] whatever the point-particle order: with Q = F̂/Ê′ (T4), Q_tidal = (F̂_t − Q_pp Ê′_t)/Ê′_pp,
-    and the same with F̂ and Ê′ exchanged for T5.  Only the point-particle terms up to v² reach k ≤ 12 times a tidal
-    term (there are no spin terms below v³), so Q_pp and Ê′_pp are taken at 1PN, without spins: LALSuite's
+    kept to kmax[3] whatever the point-particle order: with Q = F̂/Ê′ (T4), Q_t = (F̂_t − Q_pp Ê′_t)/Ê′_pp, and
+    the same with F̂ and Ê′ exchanged for T5 (series.divide's recursion, Q_k = (N_k − Σ_{i≥1} D_i Q_{k−i})/D_0,
+    on the tidal powers).  Only the point-particle terms up to v² reach k ≤ 12 times a tidal term (there are no
+    spin terms below v³ and no logarithms below v⁶), so Q_pp and Ê′_pp are taken at 1PN, without spins: LALSuite's
     fixed SpinTaylorT4 and T5 tidal coefficients (``XLALSimInspiralTaylorT4wdot_1{0,2}PNTidalCoeff``,
-    ``XLALSimInspiralTaylorT2dtdv_1{0,2}PNTidalCoeff``), which tests/test_pn_tides.py checks these against."""
-    Et, any_e = tidal_part(E_raw, kmax)
-    Ft, any_f = tidal_part(F_raw, kmax)
-    if not (any_e or any_f):
+    ``XLALSimInspiralTaylorT2dtdv_1{0,2}PNTidalCoeff``), which tests/test_pn_tides.py checks these against.
+    In numpy on the coefficients, not compiled (series.divide's general products compiled into _vdot_series added
+    ~40 s to a cold start, these loops compiled ~4 s, measured under load; in numpy they add nothing to it)."""
+    top = min(int(kmax[3]), N.shape[-3] - 1)
+    powers = range(TIDAL_K, top + 1)
+    e_t = {k: 0.5 * (k + 2) * E_raw[..., k, 0, 0] for k in powers}   # Ê′ of the tidal energy terms
+    f_t = {k: F_raw[..., k, 0, 0] for k in powers}
+    if not any(np.any(e_t[k]) or np.any(f_t[k]) for k in powers):
         return
-    Ept = energy_derivative_series(Et)
-    k1 = np.array([2, -1, -1, -1], dtype=np.int64)   # 1PN, no spins
-    kt = np.array([kmax[3], -1, -1, kmax[3]], dtype=np.int64)
-    Ep1 = energy_derivative_series(truncate(E_raw.copy(), k1))
-    F1 = truncate(F_raw.copy(), k1)
     if approx == 0:
-        _accumulate(N, Ft)
-        _accumulate(D, Ept)
-    elif approx == 1:
-        _accumulate(N, divide(Ft - multiply(divide(F1, Ep1, k1), Ept, kt), Ep1, kt))
+        N_t, D_t = f_t, e_t
     else:
-        _accumulate(D, divide(Ept - multiply(divide(Ep1, F1, k1), Ft, kt), F1, kt))
-    _accumulate(Ep, Ept)
-
-
-@njit(cache=True)
-def _accumulate(C, T):
-    """C += T where T has a term (adding the zeros would turn C's −0.0 into 0.0)."""
-    for k in range(C.shape[0]):
-        for b in range(C.shape[1]):
-            for l in range(C.shape[2]):
-                if T[k, b, l] != 0.0:
-                    C[k, b, l] += T[k, b, l]
+        e1 = [0.5 * (k + 2) * E_raw[..., k, 0, 0] for k in range(3)]   # the 1PN Ê′ and F̂
+        f1 = [F_raw[..., k, 0, 0] for k in range(3)]
+        num_pp, den_pp, num_t, den_t = (f1, e1, f_t, e_t) if approx == 1 else (e1, f1, e_t, f_t)
+        q = []                           # Q_pp to v²
+        for k in range(3):
+            x = num_pp[k]
+            for i in range(1, k + 1):
+                x = x - den_pp[i] * q[k - i]
+            q.append(x / den_pp[0])
+        t = {}                           # Q_t
+        for k in powers:
+            x = num_t[k]
+            for i in range(3):
+                if k - i in den_t:
+                    x = x - q[i] * den_t[k - i]
+            for i in range(1, min(k - TIDAL_K, 2) + 1):
+                x = x - den_pp[i] * t[k - i]
+            t[k] = x / den_pp[0]
+        N_t, D_t = (t, {}) if approx == 1 else ({}, t)
+    for k in powers:
+        for series, terms in ((N, N_t), (D, D_t), (Ep, e_t)):
+            if k in terms:
+                series[..., k, 0, 0] += terms[k]
 
 
 @njit(cache=True)
@@ -680,9 +690,15 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     E, F = energy_series(X1, kappa1, kappa2, lambda1, lambda2), flux_series(X1, kappa1, kappa2, lambda1, lambda2)
     kmax, approx = np.array(kmax, dtype=np.int64), APPROXIMANTS.index(approximant)
     if not shape_of(X1):   # one binary (evolve): _vdot_series_each would cost 3.5 s more to compile, cold
-        return (p[None],) + tuple(x[None] for x in _vdot_series(E, F, kmax, approx))
+        N, D, Ep = _vdot_series(E, F, kmax, approx)
+        if lambda1 or lambda2:
+            _add_tides(E, F, kmax, approx, N, D, Ep)
+        return p[None], N[None], D[None], Ep[None]
     E, F = (np.ascontiguousarray(np.moveaxis(x, -1, 0)) for x in (E, F))
-    return (np.ascontiguousarray(p.T),) + _vdot_series_each(E, F, kmax, approx)
+    N, D, Ep = _vdot_series_each(E, F, kmax, approx)
+    if np.any(lambda1) or np.any(lambda2):
+        _add_tides(E, F, kmax, approx, N, D, Ep)
+    return np.ascontiguousarray(p.T), N, D, Ep
 
 
 @njit(cache=True)
