@@ -36,9 +36,8 @@ Orbit averaging a 2PN spin-spin term leaves an O(v³) relative error (Racine et 
 this is the standard SpinTaylor model and the one LALSuite integrates.
 
 The spin-induced quadrupole κᵢ (Qᵢ = −κᵢ χᵢ² mᵢ³) and the tidal deformability Λᵢ of a neutron star are both set
-by its equation of state; quasi-universal relations connect them (Yagi & Yunes 2013, arXiv:1303.1528: the
-"I-Love-Q" relations, e.g. κ ≈ 2–20 for Λ ≈ 10–5000), but pnrotor takes each as given: which relation, if any,
-is the user's choice.
+by its equation of state; quasi-universal relations connect them (Yagi & Yunes 2013, arXiv:1303.1528, the
+"I-Love-Q" relations), but pnrotor takes each as given: which relation, if any, is the user's choice.
 """
 
 import math
