@@ -1,14 +1,21 @@
 """Benchmark of pnrotor.pn.evolve against LALSuite's SpinTaylor orbit evolution, same cases, same output.
 
-For every case (equal mass, q = 3, q = 10, near-extremal spins, BNS; nonspinning, aligned, precessing)
-both codes produce the orbit uniformly sampled at Δt = 1/4096 s from f_start to the end of the
-inspiral:
+For every case (equal mass, q = 3, q = 10, near-extremal spins, BNS; nonspinning, aligned, precessing; and
+with neutron-star tides, :data:`TIDAL`: a 1.4 + 1.3 M☉ BNS from 40 Hz with Λ = 350, 820, nonspinning and
+precessing, and an 8 + 1.4 M☉ NSBH with Λ₂ = 600) both codes produce the orbit uniformly sampled at
+Δt = 1/4096 s from f_start to the end of the inspiral:
 
 * LAL: ``pnrotor.interop.lal.spintaylor_series``, i.e.
-  ``lalsimulation.SimInspiralSpinTaylorPNEvolveOrbit(Δt, …, fStart, fEnd=0, …, spinO=-1, tideO=0, phaseO=7,
-  lscorr=0, SpinTaylorTn)`` (Python call included);
-* pnrotor: ``evolve(…, f_start, approximant=Tn, sampling=Δt, **lalsuite_orders(Tn))`` (Python call
-  included: unit conversion, setup, both integrations, sampling, rotor reconstruction).
+  ``lalsimulation.SimInspiralSpinTaylorPNEvolveOrbit(Δt, …, fStart, fEnd=0, …, lambda1, lambda2, …, spinO=-1,
+  tideO=-1 with tides or 0, phaseO=7, lscorr=0, SpinTaylorTn)`` (Python call included);
+* pnrotor: ``evolve(…, f_start, approximant=Tn, sampling=Δt, lambda1=…, lambda2=…, **lalsuite_orders(Tn))``
+  (Python call included: unit conversion, setup, both integrations, sampling, rotor reconstruction).
+
+Then the cost of each of pnrotor's physics options against the same run without it, interleaved (``--options``
+only, or skipped with ``--no-options``; orbits with sampling='final', so that the cost of ~10⁵ output samples,
+whose allocation varies by ms from call to call on a shared machine, is not measured): the tides of that BNS, horizon absorption on a q = 10 binary with
+χ₁ = 0.9 along ℓ̂ (and the orbital phase it adds to v = 0.3 and 0.4), the modes of the BNS at amplitude order 4
+against 3.5 and with the memory against without.
 
 Timings are medians over interleaved rounds (LAL and pnrotor alternate case by case), which is robust on
 a shared machine.  Each timing includes freeing that call's own output and nothing else (freeing a
@@ -20,7 +27,8 @@ and its integration-only wall time, its accepted steps, and the samples.  Numba 
 measured separately, in fresh processes with an empty NUMBA_CACHE_DIR (cold) and again with that
 cache filled (warm).
 
-    python benchmarks/bench_pn.py [--rounds 15] [--approximants T4 T1 T5] [--no-compile] [--json out.json]
+    python benchmarks/bench_pn.py [--rounds 15] [--approximants T4 T1 T5] [--no-compile] [--no-options]
+                                  [--options] [--json out.json]
 """
 
 import argparse
@@ -37,6 +45,67 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from pn_cases import CASES  # noqa: E402  (the cases of tests/test_pn_lal.py)
 
 DT = 1.0 / 4096
+TIDAL = {   # m1, m2, χ₁, χ₂, f_start, (Λ₁, Λ₂): cases of tests/test_pn_tides.py
+    "BNS-tidal": (1.4, 1.3, [0, 0, 0], [0, 0, 0], 40.0, (350.0, 820.0)),
+    "BNS-tidal-precessing": (1.4, 1.3, [0.03, 0.02, 0.03], [0.0, -0.04, 0.01], 40.0, (350.0, 820.0)),
+    "NSBH-tidal": (8.0, 1.4, [0, 0, 0.5], [0, 0, 0], 30.0, (0.0, 600.0)),
+}
+ALL = {**{name: (*case, (0.0, 0.0)) for name, case in CASES.items()}, **TIDAL}
+
+
+def _median_ms(samples):
+    return 1e3 * statistics.median(samples)
+
+
+def option_costs(rounds):
+    """Each physics option's cost: the run (or its modes) with the option against the same without it, interleaved
+    round by round → {option: (median ms without, median ms with, their range over rounds)}."""
+    from pnrotor.pn import evolve, lalsuite_orders
+    from pnrotor.pn.system import _spin_independent_parts
+    from pnrotor.waveform.modes import modes
+
+    m1, m2, c1, c2, f, lambdas = TIDAL["BNS-tidal"]
+    orders = lalsuite_orders("T4")
+    base = dict(approximant="T4", sampling="final", **orders)   # the model's cost: set-up and integration
+    run = evolve(m1, m2, c1, c2, f, **{**base, "sampling": DT})
+    bh = (50.0, 5.0, [0, 0, 0.9], [0, 0, 0], 20.0)
+    pairs = {
+        "tides (BNS from 40 Hz, Λ = 350, 820; evolve)": (
+            lambda: evolve(m1, m2, c1, c2, f, **base),
+            lambda: evolve(m1, m2, c1, c2, f, lambda1=lambdas[0], lambda2=lambdas[1], **base)),
+        "horizon absorption (50 + 5 Msun, chi1 = 0.9 along l, 20 Hz)": (
+            lambda: evolve(*bh, **base), lambda: evolve(*bh, horizon_absorption=True, **base)),
+        "amplitude order 4 against 3.5 (modes, l <= 8, the BNS)": (
+            lambda: modes(run, 8, 3.5), lambda: modes(run, 8, 4.0)),
+        "memory (modes, l <= 8, the BNS)": (
+            lambda: modes(run, 8, 3.5), lambda: modes(run, 8, 3.5, memory=True)),
+    }
+    times = {name: ([], []) for name in pairs}
+    for name, (off, on) in pairs.items():   # warm up
+        off(), on()
+    for _ in range(rounds):
+        for name, (off, on) in pairs.items():
+            for fn, out in zip((off, on), times[name]):
+                _spin_independent_parts.cache_clear()
+                t = time.perf_counter()
+                fn()
+                out.append(time.perf_counter() - t)
+    return {name: (_median_ms(a), _median_ms(b), (1e3 * min(b), 1e3 * max(b))) for name, (a, b) in times.items()}
+
+
+def horizon_dephasing():
+    """The orbital phase horizon absorption adds to the q = 10 binary of :func:`option_costs` (χ₁ = 0.9 along ℓ̂,
+    T4 at LAL's orders) from 20 Hz to the GW frequencies of v = 0.3 and 0.4 → {v: ΔΦ in rad}."""
+    from pnrotor.pn import evolve, lalsuite_orders
+    from pnrotor.pn.initial import frequency_from_v, total_mass_seconds
+
+    out = {}
+    for v in (0.3, 0.4):
+        f_max = frequency_from_v(v, total_mass_seconds(50.0, 5.0))
+        phases = [evolve(50.0, 5.0, [0, 0, 0.9], [0, 0, 0], 20.0, f_max=f_max, sampling="final",
+                         horizon_absorption=h, **lalsuite_orders("T4")).Phi[-1] for h in (False, True)]
+        out[v] = phases[1] - phases[0]
+    return out
 
 
 def compile_times():
@@ -71,8 +140,10 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--rounds", type=int, default=15)
     ap.add_argument("--approximants", nargs="+", default=["T4"])
-    ap.add_argument("--cases", nargs="+", default=list(CASES))
+    ap.add_argument("--cases", nargs="+", default=list(ALL))
     ap.add_argument("--no-compile", action="store_true")
+    ap.add_argument("--no-options", action="store_true", help="skip the cost of the physics options")
+    ap.add_argument("--options", action="store_true", help="only the cost of the physics options")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
 
@@ -81,41 +152,44 @@ def main():
     from pnrotor.pn.system import _spin_independent_parts
 
     def lal_call(case, approx):
-        return spintaylor_series(*case, approx, DT)[0].data.length
+        *binary, lambdas = case
+        return spintaylor_series(*binary, approx, DT, lambdas=lambdas, tideO=-1 if any(lambdas) else 0)[0].data.length
 
     results = {}
+    if args.options:
+        args.approximants, args.no_compile = [], True
     for approx in args.approximants:
         orders = lalsuite_orders(approx)
         runs = {}
         for name in args.cases:
-            case = CASES[name]
-            m1, m2, c1, c2, f = case
+            case = ALL[name]
+            m1, m2, c1, c2, f, (l1, l2) = case
             # warm up both (numba cache load, LAL lazy init)
             n_lal = lal_call(case, approx)
-            e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling=DT, **orders)
-            es = evolve(m1, m2, c1, c2, f, approximant=approx, sampling="steps", **orders)
+            e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling=DT, lambda1=l1, lambda2=l2, **orders)
+            es = evolve(m1, m2, c1, c2, f, approximant=approx, sampling="steps", lambda1=l1, lambda2=l2, **orders)
             runs[name] = dict(lal=[], ours=[], ours_steps=[], integrate=[], n_lal=n_lal, n_ours=len(e),
                               steps=e.stats["naccepted"], rejected=e.stats["nrejected"], nfev=e.stats["nfev"],
                               state=e.inputs["state"], termination=e.termination, steps_rows=len(es))
         for _ in range(args.rounds):
             for name in args.cases:
-                m1, m2, c1, c2, f = CASES[name]
+                m1, m2, c1, c2, f, (l1, l2) = ALL[name]
                 r = runs[name]
                 # each timing includes freeing the output (LAL's SWIG series are destroyed when
                 # lal_call returns), so no run pays for the deallocation of another one
                 t = time.perf_counter()
-                lal_call(CASES[name], approx)
+                lal_call(ALL[name], approx)
                 r["lal"].append(time.perf_counter() - t)
                 _spin_independent_parts.cache_clear()   # each call pays its set-up, as for a new binary
                 t = time.perf_counter()
-                e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling=DT, **orders)
+                e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling=DT, lambda1=l1, lambda2=l2, **orders)
                 integ = e.stats["wall_time_integrate_s"]
                 del e
                 r["ours"].append(time.perf_counter() - t)
                 r["integrate"].append(integ)
                 _spin_independent_parts.cache_clear()
                 t = time.perf_counter()
-                e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling="steps", **orders)
+                e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling="steps", lambda1=l1, lambda2=l2, **orders)
                 del e
                 r["ours_steps"].append(time.perf_counter() - t)
         print(f"\nSpinTaylor{approx} vs pnrotor {approx}: Δt = 1/4096 s, median of {args.rounds} interleaved rounds (ms)")
@@ -133,6 +207,16 @@ def main():
         results[approx] = {n: {k: v for k, v in r.items() if k not in ("lal", "ours", "ours_steps", "integrate")}
                            for n, r in runs.items()}
 
+    if not args.no_options:
+        costs = option_costs(args.rounds)
+        print(f"\nCost of the physics options: median of {args.rounds} interleaved rounds (ms; range with it)")
+        for name, (off, on, (lo, hi)) in costs.items():
+            print(f"  {name:58s} without {off:8.2f}  with {on:8.2f} ({lo:.2f}-{hi:.2f})  ratio {on / off:5.2f}")
+        dephasing = horizon_dephasing()
+        print("  horizon absorption's orbital dephasing, 50 + 5 Msun, chi1 = 0.9 along l, from 20 Hz: "
+              + ", ".join(f"{phase:+.4f} rad to v = {v}" for v, phase in dephasing.items()))
+        results["options"] = costs
+        results["horizon_dephasing"] = dephasing
     if not args.no_compile:
         ct = compile_times()
         print("\nNumba start-up (fresh processes; seconds):")

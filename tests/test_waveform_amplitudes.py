@@ -19,20 +19,21 @@ from pnrotor.waveform.layout import ell_m, mode_index
 MASSES = [(10.0, 10.0), (30.0, 10.0), (50.0, 5.0)]
 
 
-def mode_flux_series(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0)):
+def mode_flux_series(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0), tides=amplitudes.NO_TIDES):
     """(F̂ coefficients of v^j, of v^j ln v), j ≤ order2, from the amplitudes' own table with aligned spins
-    χᵢ = aᵢ ℓ̂: with H_ℓm = h₀ Σ_k v^k (A_k + B_k ln v), h₀ = 8√(π/5) ν v², the flux relative to
-    (32/5) ν² v¹⁰ is F̂ = (1/8) Σ_ℓm m² |Σ_k v^k (A_k + B_k ln v)|², exactly, as polynomials."""
+    χᵢ = aᵢ ℓ̂ (and ``tides`` as amplitudes.table takes them): with H_ℓm = h₀ Σ_k v^k (A_k + B_k ln v),
+    h₀ = 8√(π/5) ν v², the flux relative to (32/5) ν² v¹⁰ is F̂ = (1/8) Σ_ℓm m² |Σ_k v^k (A_k + B_k ln v)|²,
+    exactly, as polynomials."""
     M = m1 + m2
     X1, X2 = m1 / M, m2 / M
     spins = bool(a1 or a2)
-    rows, ks, qs, cs, parities = amplitudes.table(X1 * X2, X1 - X2, 8, order2, spins)
+    rows, ks, qs, cs, parities = amplitudes.table(X1 * X2, X1 - X2, 8, order2, spins, tides)
     q = np.zeros(amplitudes.N_Q)
     q[0] = 1.0
     q[2 + 2] = X1 * X1 * a1 + X2 * X2 * a2                                   # S_ell
     q[5 + 2] = X2 * a2 - X1 * a1                                             # Sigma_ell
     q[8 + 2] = kappa[0] * X1 * X1 * a1 * a1 + 2 * X1 * X2 * a1 * a2 + kappa[1] * X2 * X2 * a2 * a2   # P_ellell
-    A = np.zeros((len(ell_m(8)), 8), dtype=complex)
+    A = np.zeros((len(ell_m(8)), order2 + 1), dtype=complex)
     B = np.zeros_like(A)
     for row, k, qi, c, parity in zip(rows, ks, qs, cs, parities):   # m ≥ 0; H_ℓ,−m from parity (−1)^ℓ H*_ℓm
         ell, m = ell_m(8)[row]
@@ -43,11 +44,10 @@ def mode_flux_series(m1, m2, order2, a1=0.0, a2=0.0, kappa=(1.0, 1.0)):
                 A[r, k] += coef * q[qi]
     f, flog = np.zeros(order2 + 1), np.zeros(order2 + 1)
     for row, (_, m) in enumerate(ell_m(8)):
-        for k in range(8):
-            for kp in range(8):
-                if k + kp <= order2:
-                    f[k + kp] += m * m * (A[row, k] * np.conj(A[row, kp])).real / 8
-                    flog[k + kp] += m * m * 2 * (B[row, k] * np.conj(A[row, kp])).real / 8
+        for k in range(order2 + 1):
+            for kp in range(order2 + 1 - k):
+                f[k + kp] += m * m * (A[row, k] * np.conj(A[row, kp])).real / 8
+                flog[k + kp] += m * m * 2 * (B[row, k] * np.conj(A[row, kp])).real / 8
     return f, flog
 
 
@@ -65,6 +65,35 @@ def test_nonspinning_modes_carry_the_pn_flux_through_3_5pn(m1, m2):
     g, glog = pn_flux_coefficients(m1, m2, 7)
     np.testing.assert_allclose(f, g, rtol=0, atol=1e-12 * np.abs(g).max())
     np.testing.assert_allclose(flog, glog, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("m1, m2", [(10.0, 10.0), (1.4, 1.4)])
+def test_equal_mass_modes_carry_the_pn_flux_through_4pn(m1, m2):
+    """The 4PN (2,2) term (Blanchet et al. 2023) with every other mode: at equal masses, where the odd-m modes vanish,
+    every mode that reaches v⁸ of the flux is known (the 3.5PN terms of (2,1), (3,1), (3,3) that unequal masses need
+    are not in the tables), so F̂ is reproduced through v⁸ with its logarithms, Blanchet et al. 2023's 4PN flux."""
+    f, flog = mode_flux_series(m1, m2, 8)
+    g, glog = pn_flux_coefficients(m1, m2, 8)
+    np.testing.assert_allclose(f, g, rtol=0, atol=1e-12 * np.abs(g).max())
+    np.testing.assert_allclose(flog, glog, rtol=0, atol=1e-12 * np.abs(glog).max())
+
+
+def test_flux_in_the_test_mass_limit_is_black_hole_perturbation_theory():
+    """ν → 0 of F̂ through 4.5PN against the flux of a particle on a circular orbit of a Schwarzschild black hole:
+    Tagoshi & Sasaki 1994 (gr-qc/9405062) through v⁸ and Tanaka, Tagoshi & Sasaki 1996 (gr-qc/9602038) at v⁹,
+    written as they are (γ, ln 2, ln 3 and ln v apart), an independent computation of the ν⁰ terms that
+    Blanchet et al. 2023's 4PN and 4.5PN flux must reduce to."""
+    g, pi, l2, l3 = 0.5772156649015329, np.pi, np.log(2.0), np.log(3.0)
+    bhpt = {0: (1, 0), 2: (-1247 / 336, 0), 3: (4 * pi, 0), 4: (-44711 / 9072, 0), 5: (-8191 / 672 * pi, 0),
+            6: (6643739519 / 69854400 - 1712 / 105 * g + 16 / 3 * pi ** 2 - 3424 / 105 * l2, -1712 / 105),
+            7: (-16285 / 504 * pi, 0),
+            8: (-323105549467 / 3178375200 + 232597 / 4410 * g - 1369 / 126 * pi ** 2 + 39931 / 294 * l2
+                - 47385 / 1568 * l3, 232597 / 4410),
+            9: (265978667519 / 745113600 * pi - 6848 / 105 * pi * g - 13696 / 105 * pi * l2, -6848 / 105 * pi)}
+    f, flog = flux.nonspinning_flux_coefficients(0.0)
+    for k in range(10):
+        c, c_log = bhpt.get(k, (0, 0))
+        assert f[k] == pytest.approx(c, rel=1e-14, abs=1e-14) and flog[k] == pytest.approx(c_log, rel=1e-14, abs=0)
 
 
 @pytest.mark.parametrize("m1, m2", MASSES)

@@ -119,7 +119,7 @@ def test_polarizations_are_the_quadrupole_formula_at_leading_order():
 
 @pytest.mark.parametrize("kw, message", [
     (dict(ell_max=9), "ell_max"), (dict(ell_max=1), "ell_max"), (dict(ell_max=True), "ell_max"),
-    (dict(amplitude_order=0.25), "amplitude_order"), (dict(amplitude_order=4.0), "amplitude_order"),
+    (dict(amplitude_order=0.25), "amplitude_order"), (dict(amplitude_order=4.5), "amplitude_order"),
     (dict(amplitude_order="x"), "amplitude_order"), (dict(amplitude_order="1.5"), "amplitude_order"),
     (dict(amplitude_order=b"1"), "amplitude_order"), (dict(amplitude_order=np.True_), "amplitude_order"),
     (dict(amplitude_order=True), "amplitude_order"), (dict(distance=-1.0), "distance"),

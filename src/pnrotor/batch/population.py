@@ -33,7 +33,7 @@ from pnrotor.batch import Outcome, check_output, read_batch
 
 __all__ = ["PopulationTable", "Plan", "plan", "run", "unsupported", "SHARED"]
 
-SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol")
+SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order")
 """The table's columns that `evolve_many` takes as shared by all its binaries: one call per combination."""
 
 FIELDS = ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat", "termination", "message", "nsteps", "nfev")
@@ -53,7 +53,8 @@ class PopulationTable:
     inputs : dict — per row (arrays of N): ``row`` (its number in the table, from 1), ``m1_Msun``,
         ``m2_Msun``, ``chi1``, ``chi2`` (at f_ref), ``f_ref_Hz``, ``f_min_Hz``, ``f_max_Hz`` (NaN where absent),
         ``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order`` (NaN: evolve's default),
-        ``precession``, ``atol``; and the options every row shares (``rtol``, ``rotor``, ...), as
+        ``precession``, ``atol``, ``lambda1``, ``lambda2``, ``tidal_order`` (NaN: evolve's default); and the options
+        every row shares (``rtol``, ``rotor``, ...), as
         `Population.inputs` has them
     """
 
@@ -156,7 +157,8 @@ class Plan:
         f_end = [p["f_max"] if p["f_max"] is not None else p["f_min"] for p in params]
         try:
             return evolve_many(column("m1"), column("m2"), column("chi1"), column("chi2"), column("f_ref"),
-                               f_end=[math.nan if f is None else f for f in f_end], **dict(zip(SHARED, shared)))
+                               f_end=[math.nan if f is None else f for f in f_end], lambda1=column("lambda1"),
+                               lambda2=column("lambda2"), **dict(zip(SHARED, shared)))
         except ValueError as error:
             return str(error)
 
@@ -183,6 +185,8 @@ class Plan:
             "spin_orbit_order": _floats(rows, "spin_orbit_order", nan),
             "spin_spin_order": _floats(rows, "spin_spin_order", nan),
             "precession": _strings(row.params["precession"] for row in rows), "atol": _floats(rows, "atol"),
+            "lambda1": _floats(rows, "lambda1"), "lambda2": _floats(rows, "lambda2"),
+            "tidal_order": _floats(rows, "tidal_order", nan),
         }
         common = {key: value for key, value in parts[0][1].inputs.items() if key not in SHARED}
         return PopulationTable(name=_strings(row.name for row in rows), **columns,

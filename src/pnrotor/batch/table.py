@@ -15,6 +15,7 @@ from pathlib import Path
 DEFAULTS = {
     "approximant": "T4", "pn_order": 3.5, "spin_orbit_order": None, "spin_spin_order": None,
     "precession": "averaged", "f_min": None, "f_max": None, "sampling": "steps", "atol": 1e-12,
+    "lambda1": 0.0, "lambda2": 0.0, "tidal_order": None,
 }
 """Defaults of the optional run parameters (those of `pnrotor.evolve`; None: evolve's own choice)."""
 
@@ -76,7 +77,8 @@ def default_name(p):
              f"chi1-{vector(map(_number, p['chi1']))}", f"chi2-{vector(map(_number, p['chi2']))}",
              f"f{_number(p['f_ref'])}"]
     for key, tag in (("f_min", "fmin"), ("f_max", "fmax"), ("pn_order", "pn"), ("spin_orbit_order", "so"),
-                     ("spin_spin_order", "ss"), ("atol", "atol")):
+                     ("spin_spin_order", "ss"), ("atol", "atol"), ("lambda1", "lambda1-"), ("lambda2", "lambda2-"),
+                     ("tidal_order", "tides")):
         if p[key] is not None and p[key] != DEFAULTS[key]:
             parts.append(f"{tag}{_number(p[key])}")
     if p["precession"] != DEFAULTS["precession"]:

@@ -81,6 +81,12 @@ def add_parser(subparsers):
                        help="steps (every integrator step, default), final (only the final state), a time step in "
                        "seconds (e.g. 1/4096 or 0.000244) or per_orbit:N (N points per orbit)")
     model.add_argument("--atol", type=float, help="absolute tolerance of the integrator (default 1e-12; rtol 0)")
+    model.add_argument("--lambda1", type=float, metavar="LAMBDA",
+                       help="dimensionless tidal deformability of body 1 (as LALSuite's lambda1; default 0)")
+    model.add_argument("--lambda2", type=float, metavar="LAMBDA",
+                       help="dimensionless tidal deformability of body 2 (default 0)")
+    model.add_argument("--tidal-order", type=float, metavar="ORDER",
+                       help="PN order of the tidal terms: 0 (none), 5 or 6 (default 6)")
     output = parser.add_argument_group("output")
     output.add_argument("-o", "--output", metavar="FILE.h5",
                         help="output file (default: waveforms/NAME.h5, NAME from the parameters, or waveforms/STEM.h5 "
@@ -98,7 +104,7 @@ def add_parser(subparsers):
                        "(--sampling 1/4096 or per_orbit:16): the default steps are far apart")
     waves.add_argument("--ell-max", type=int, metavar="L", help=f"modes l = 2 ... L, L <= 8 (default {ELL_MAX})")
     waves.add_argument("--amplitude-order", type=float, metavar="A",
-                       help=f"PN amplitude order 0, 0.5, ..., 3.5 (default {AMPLITUDE_ORDER})")
+                       help=f"PN amplitude order 0, 0.5, ..., 4 (default {AMPLITUDE_ORDER})")
     waves.add_argument("--distance", type=float, metavar="MPC",
                        help="store the modes as strain at this distance in Mpc (default: r h / M)")
     output.add_argument("-q", "--quiet", action="store_true",
@@ -254,7 +260,8 @@ def summary(run, wall=None):
         f"pnrotor evolve: {i['m1_Msun']:g} + {i['m2_Msun']:g} Msun, chi1 {vec(i['chi1'])}, chi2 {vec(i['chi2'])}, "
         f"f_ref {i['f_ref_Hz']:g} Hz ({i['spin_content']})",
         f"  model          {i['approximant']}, PN order {i['pn_order']:g} (spin-orbit {i['spin_orbit_order']:g}, "
-        f"spin-spin {i['spin_spin_order']:g}), precession {i['precession']}, atol {i['atol']:g}",
+        f"spin-spin {i['spin_spin_order']:g}), precession {i['precession']}, atol {i['atol']:g}"
+        + _tides_text(i),
         f"  duration       {(t1 - t0) * M:.6g} s = {t1 - t0:.6g} M  (t from {t0:.6g} to {t1:.6g} M)",
         f"  ΔΦ/2π          {_orbits_text(orbits, exact)}",
         f"  v              {v0:.6g} -> {v1:.6g}",
@@ -268,6 +275,13 @@ def summary(run, wall=None):
         + (f", {wall:.3g} s in all (imports and writing included)" if wall is not None else ""),
     ]
     return lines
+
+
+def _tides_text(inputs):
+    """', tides Λ₁ …, Λ₂ … to 6PN' for a run with tidal deformabilities (none in files written before them)."""
+    if not (inputs.get("lambda1") or inputs.get("lambda2")) or not inputs.get("tidal_order"):
+        return ""
+    return f", tides lambda1 {inputs['lambda1']:g}, lambda2 {inputs['lambda2']:g} to {inputs['tidal_order']:g}PN"
 
 
 def _sampling_text(inputs):

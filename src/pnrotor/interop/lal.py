@@ -3,7 +3,8 @@ modes handed to LALSuite.
 
 One place for the call that tests and benchmarks share.  With ``pnrotor.pn.lalsuite_orders(approximant)``
 on pnrotor's side, ``lalsimulation.SimInspiralSpinTaylorPNEvolveOrbit`` is called with spinO = −1 (all
-spin terms), tideO = 0, phaseO = 7 (3.5PN), lscorr = 0 and no tidal deformability; its conventions,
+spin terms), phaseO = 7 (3.5PN), lscorr = 0 and, unless given, no tidal deformability (lambda1 = lambda2 = 0,
+tideO = 0; with Λᵢ, tideO as :func:`pnrotor.pn.lalsuite_orders` maps it); its conventions,
 read from LALSimInspiralSpinTaylor.c and checked by tests/test_pn_lal.py against LAL's runs:
 
 * fStart is the gravitational-wave frequency, spins in and out are the dimensionless χᵢ;
@@ -25,16 +26,18 @@ __all__ = ["spintaylor_series", "spintaylor_orbit", "sph_harm_time_series", "pol
 
 
 def spintaylor_series(m1, m2, chi1, chi2, f_start, approximant="T4", delta_t=1.0 / 4096,
-                      ell_hat=(0.0, 0.0, 1.0), e1=(1.0, 0.0, 0.0), kappa=(1.0, 1.0)):
+                      ell_hat=(0.0, 0.0, 1.0), e1=(1.0, 0.0, 0.0), kappa=(1.0, 1.0), lambdas=(0.0, 0.0), tideO=0):
     """LAL's 14 output ``REAL8TimeSeries`` (V, Phi, S1x..z, S2x..z, LNhatx..z, E1x..z), as LAL returns them.
 
     Masses in M☉, ``f_start`` in Hz (gravitational-wave frequency), ``delta_t`` in s, ``approximant`` one
-    of "T1", "T4", "T5", ``kappa`` the spin-induced quadrupole parameters κ₁, κ₂ (1 for black holes).
+    of "T1", "T4", "T5", ``kappa`` the spin-induced quadrupole parameters κ₁, κ₂ (1 for black holes),
+    ``lambdas`` the dimensionless tidal deformabilities Λ₁, Λ₂ and ``tideO`` LAL's tidal order (−1 all, 10 the
+    5PN terms only, 0 none).
     """
     approx = lalsimulation.GetApproximantFromString("SpinTaylor" + approximant)
     return lalsimulation.SimInspiralSpinTaylorPNEvolveOrbit(
         delta_t, m1 * lal.MSUN_SI, m2 * lal.MSUN_SI, f_start, 0.0, *chi1, *chi2, *ell_hat, *e1,
-        0.0, 0.0, kappa[0], kappa[1], -1, 0, 7, 0, approx)
+        lambdas[0], lambdas[1], kappa[0], kappa[1], -1, tideO, 7, 0, approx)
 
 
 def spintaylor_orbit(*args, **kwargs):

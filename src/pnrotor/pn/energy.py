@@ -28,8 +28,16 @@ Sources, term by term (every coefficient below carries its own citation):
   SpinTaylor (``XLALSimInspiralPNEnergy_*Avg``); we verified them independently (tests) against the
   aligned-spin form, Eq. (3.33) of arXiv:1501.01529 in the s_ℓ, σ_ℓ, κ± variables.
 
+* tidal (adiabatic electric-quadrupole deformation of neutron stars), 5PN and 6PN: Vines, Flanagan &
+  Hinderer, PRD 83, 084051 (2011), arXiv:1101.1673, Eq. (2.11) (:func:`tidal_energy`), in the
+  dimensionless deformabilities Λᵢ = λᵢ/mᵢ⁵ = (2/3) k₂ (Rᵢ/mᵢ)⁵ of LALSuite's ``lambda1``/``lambda2``.
+
 Orbit averaging a 2PN spin-spin term leaves an O(v³) relative error (Racine et al. 2009, App. B);
 this is the standard SpinTaylor model and the one LALSuite integrates.
+
+The spin-induced quadrupole κᵢ (Qᵢ = −κᵢ χᵢ² mᵢ³) and the tidal deformability Λᵢ of a neutron star are both set
+by its equation of state; quasi-universal relations connect them (Yagi & Yunes 2013, arXiv:1303.1528, the
+"I-Love-Q" relations), but pnrotor takes each as given: which relation, if any, is the user's choice.
 """
 
 import math
@@ -37,7 +45,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .series import assemble, shape_of
+from .series import NK, add_tidal, assemble, shape_of
 
 EULER_GAMMA = 0.57721566490153286061
 LN2 = math.log(2.0)
@@ -54,8 +62,8 @@ def nonspinning_energy_coefficients(nu):
 
     Blanchet, Living Rev. Rel. 17, 2 (2014), Eq. (233); x = v².
     """
-    e = np.zeros((10,) + shape_of(nu))
-    elog = np.zeros((10,) + shape_of(nu))
+    e = np.zeros((NK,) + shape_of(nu))
+    elog = np.zeros((NK,) + shape_of(nu))
     e[0] = 1.0
     # 1PN: −3/4 − ν/12                                          [Blanchet 2014, Eq. (233)]
     e[2] = -0.75 - nu / 12.0
@@ -133,13 +141,36 @@ def spin1_spin2_energy(nu):
 
 
 # --------------------------------------------------------------------------------------------------
+# tidal
+# --------------------------------------------------------------------------------------------------
+
+def tidal_energy(X):
+    """{k: c_k} with Ê ∋ Λ c_k v^k for the body of mass fraction X = m/M and dimensionless deformability Λ.
+
+    Vines, Flanagan & Hinderer 2011, arXiv:1101.1673, Eq. (2.11), for their body 2: Ê ∋ −9 (χ₁/χ₂) λ̂
+    − (11/2)(χ₁/χ₂)(3 + 2χ₂ + 3χ₂²) λ̂ x with their χᵢ = mᵢ/M (mass fractions, not spins), λ̂ = λ₂ x⁵/M⁵ and
+    x = v².  With λ₂ = Λ₂ m₂⁵, λ̂ = Λ₂ χ₂⁵ v¹⁰; for the body X (the other's fraction 1 − X):
+    """
+    Y = 1.0 - X
+    X4 = (X * X) * (X * X)
+    return {
+        # 5PN: −9 (1 − X) X⁴                                     [Vines+ 2011, Eq. (2.11)]
+        10: -9.0 * Y * X4,
+        # 6PN: −(11/2)(1 − X)(3 + 2X + 3X²) X⁴                   [Vines+ 2011, Eq. (2.11)]
+        12: -5.5 * Y * (3.0 + 2.0 * X + 3.0 * (X * X)) * X4,
+    }
+
+
+# --------------------------------------------------------------------------------------------------
 # assembled series
 # --------------------------------------------------------------------------------------------------
 
-def energy_series(X1, kappa1=1.0, kappa2=1.0):
-    """Ê(v): every known term (nonspinning to 4PN, spin-orbit to 3.5PN, spin² to 3PN), untruncated."""
-    return assemble(X1, kappa1, kappa2, nonspinning_energy_coefficients, spin_orbit_energy_sl_sigma,
-                    spin_spin_energy_per_body, spin1_spin2_energy)
+def energy_series(X1, kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0):
+    """Ê(v): every known term (nonspinning to 4PN, spin-orbit to 3.5PN, spin² to 3PN, tidal at 5PN and 6PN),
+    untruncated."""
+    E = assemble(X1, kappa1, kappa2, nonspinning_energy_coefficients, spin_orbit_energy_sl_sigma,
+                 spin_spin_energy_per_body, spin1_spin2_energy)
+    return add_tidal(E, X1, 1.0 - X1, lambda1, lambda2, tidal_energy)
 
 
 @njit(cache=True)

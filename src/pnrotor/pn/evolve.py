@@ -52,6 +52,7 @@ from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STAT
 from . import initial as _ini
 from . import system as _sys
 from .sampling import compile_output_kernel, sample
+from .flux import horizon_flux
 from .series import basis_values, kmax_from_orders
 from .settings import normalize_approximant, settings
 
@@ -184,16 +185,29 @@ def build_system(s):
     bvals, y0 = _start(s)
     p, at_v0 = _sys.make_parameters(
         s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
-        kappa2=s.kappa2, v_end=s.v_max, spin_tol=_sys.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
+        kappa2=s.kappa2, lambda1=s.lambda1, lambda2=s.lambda2, v_end=s.v_max, spin_tol=_sys.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
         phase_shift=s.precession_phase_shift,
-        aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0)
+        aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
+        horizon=_horizon(s, bvals))
     _check_start(s, kmax, bvals, *at_v0, _sys.earlier_end(*events.addresses, y0, p))
     return System(rhs, events, p, y0, kmax, bvals)
 
 
+def _horizon(s, bvals):
+    """{k: c} of the flux into both horizons (:func:`pnrotor.pn.flux.horizon_flux`) with ``horizon_absorption``
+    (nonspinning or aligned spins, ℓ̂·χᵢ = bvals[1], bvals[2]), else None."""
+    if not s.horizon_absorption:
+        return None
+    out = {}
+    for X, a in ((s.X1, bvals[1]), (1.0 - s.X1, bvals[2])):
+        for k, c in horizon_flux(X, a).items():
+            out[k] = out.get(k, 0.0) + c
+    return out
+
+
 def kmax_of(s):
     """The PN truncation of settings ``s`` (:func:`pnrotor.pn.series.kmax_from_orders`)."""
-    return kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order)
+    return kmax_from_orders(s.pn_order, s.spin_orbit_order, s.spin_spin_order, s.tidal_order)
 
 
 def _functions(use_aligned, precession):
@@ -249,12 +263,12 @@ def _omega_l(s):
     return "varpi" if s.precession == "averaged_varpi" else "torque"
 
 
-def population_parts(s, X1, kappa1, kappa2):
+def population_parts(s, X1, kappa1, kappa2, lambda1=0.0, lambda2=0.0):
     """:func:`pnrotor.pn.system.spin_independent_parts` of binaries with the model options of settings ``s``
-    and arrays X1, κ₁, κ₂ (row i is what :func:`build_rows` takes for binary i)."""
+    and arrays X1, κ₁, κ₂, Λ₁, Λ₂ (row i is what :func:`build_rows` takes for binary i)."""
     return _sys.spin_independent_parts(X1, kappa1, kappa2, s.approximant, kmax_of(s),
                                        s.spin_orbit_order, s.spin_spin_order, s.rotor, s.precession_phase_shift,
-                                       _omega_l(s))
+                                       _omega_l(s), lambda1, lambda2)
 
 
 def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
@@ -262,7 +276,8 @@ def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
     of them does at a lower v (``ended``, :func:`pnrotor.pn.system.earlier_end`)."""
     why = _ended_at(n0, d0, e0, peak0)
     if why or ended:   # the bound: the first end on inspiral_end's grid or on the start check's, whichever is lower
-        v_end = min(_sys.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2), ended or 1.0)
+        v_end = min(_sys.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2, s.lambda1, s.lambda2),
+                    ended or 1.0)
         why = f"{why} at v = {s.v0:.4g}" if why else \
             f"it ended at a lower v (v = {v_end:.4g}) and v = {s.v0:.4g} is beyond"
         raise ValueError(f"f_ref = {s.f_ref} Hz is past the end of the {s.approximant} inspiral: {why}; for these "
@@ -358,7 +373,8 @@ def termination(status, idx, end, approximant):
 def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4", pn_order=3.5,
            spin_orbit_order=None, spin_spin_order=None, ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0),
            kappa1=1.0, kappa2=1.0, atol=1e-12, rtol=0.0, sampling="steps", rotor="coprecessing",
-           precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000):
+           precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000,
+           lambda1=0.0, lambda2=0.0, tidal_order=None, horizon_absorption=False):
     r"""Evolve a quasi-circular (precessing) compact binary in post-Newtonian theory.
 
     Parameters
@@ -411,6 +427,20 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         :mod:`pnrotor.pn.system`).
     max_steps : int
         Step limit per half.
+    lambda1, lambda2 : float
+        Dimensionless tidal deformabilities Λᵢ = (2/3) k₂,ᵢ (Rᵢ c²/G mᵢ)⁵ of the bodies (LALSuite's ``lambda1``,
+        ``lambda2``; 0 for black holes): the adiabatic quadrupolar tides of Vines, Flanagan & Hinderer 2011 in the
+        energy and flux (:mod:`pnrotor.pn.energy`, :mod:`pnrotor.pn.flux`).  κᵢ is not derived from Λᵢ: any
+        universal relation between them is the caller's choice.
+    tidal_order : {None, 0, 5, 6}
+        PN order of the tidal terms: 0 none, 5 the leading ones, 6 with their 1PN corrections (None: 6), kept
+        whatever ``pn_order`` is, as LALSuite's tideO.
+    horizon_absorption : bool
+        Add the energy flux into black-hole horizons (Alvi 2001 at leading order in the tidal coupling, exact in
+        the spins: relative 2.5PN with spins, 4PN without; :func:`pnrotor.pn.flux.horizon_flux`) to the energy
+        balance, at first order in it, whatever ``pn_order`` is.  For nonspinning binaries and spins along ℓ̂
+        (a ValueError for precessing ones); the spins' and masses' own change by the absorbed angular momentum
+        and energy is not followed (the aligned state holds the spins constant).  LALSuite has no such option.
 
     Returns
     -------
@@ -421,7 +451,8 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
                  spin_orbit_order=spin_orbit_order, spin_spin_order=spin_spin_order, ell_hat=ell_hat, n_hat=n_hat,
                  kappa1=kappa1, kappa2=kappa2, atol=atol, rtol=rtol, sampling=sampling, rotor=rotor,
                  precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
-                 precession=precession, max_steps=max_steps)
+                 precession=precession, max_steps=max_steps, lambda1=lambda1, lambda2=lambda2, tidal_order=tidal_order,
+                 horizon_absorption=horizon_absorption)
     system = build_system(s)
     compile_output_kernel(s)
     inputs = s.inputs()
@@ -476,10 +507,10 @@ def _stats(res_f, res_b, term_f, term_b):
     return stats
 
 
-def lalsuite_orders(approximant, phaseO=7, spinO=-1):
+def lalsuite_orders(approximant, phaseO=7, spinO=-1, tideO=-1):
     """Our truncation equivalent to LALSuite's SpinTaylorTn (``SimInspiralSpinTaylorPNEvolveOrbit``).
 
-    With phaseO = 7 (3.5PN), spinO = −1 (all), tideO = 0, lscorr = 0, quadparam = κ:
+    With phaseO = 7 (3.5PN), spinO = −1 (all), lscorr = 0, quadparam = κ, lambda1/lambda2 = Λᵢ:
 
     * SpinTaylorT4 / T5: nonspinning to 3.5PN; spin-orbit in v̇ to 3PN (LALSuite's 3.5PN spin-orbit
       coefficients are set only for its IMRPhenomTP path and not used by SpinTaylor); spin² to 3PN,
@@ -489,9 +520,14 @@ def lalsuite_orders(approximant, phaseO=7, spinO=-1):
       setup but not added in the derivative) → spin_orbit_order 2.5, with the phase shift still on
       (LALSuite applies it for spinO = −1).  Its 3PN QM (ℓ̂·S)² flux coefficient differs from ours
       (see :mod:`pnrotor.pn.flux`).
+    * tides: tideO = −1 (LAL's default, ``LAL_SIM_INSPIRAL_TIDAL_ORDER_ALL``) or 12 → tidal_order 6; 10 (5PN
+      only) → 5; 0 → 0.
     """
     a = normalize_approximant(approximant)
     if spinO != -1 or phaseO not in (7, -1):
         raise ValueError("only phaseO = 7 (or -1) with spinO = -1 is mapped")
+    tides = {-1: 6.0, 12: 6.0, 10: 5.0, 0: 0.0}
+    if tideO not in tides:
+        raise ValueError(f"tideO must be one of -1 (all), 12, 10 or 0, got {tideO!r}")
     return {"pn_order": 3.5, "spin_orbit_order": 2.5 if a == "T1" else 3.0, "spin_spin_order": 3.0,
-            "precession_phase_shift": True}
+            "precession_phase_shift": True, "tidal_order": tides[tideO]}

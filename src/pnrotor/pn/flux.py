@@ -17,6 +17,10 @@ Sources, term by term:
   quadrupole-monopole of Poisson 1998 included there), orbit averaged with
   ⟨nⁱnʲ⟩ = ⟨λⁱλʲ⟩ = ½(δⁱʲ − ℓⁱℓʲ).  Checked in the tests against the aligned-spin form, Eq. (4.14)
   of arXiv:1501.01529.
+* tidal, 5PN and 6PN: Vines, Flanagan & Hinderer 2011, arXiv:1101.1673, Eq. (3.6) ((3.7) on arXiv)
+  (:func:`tidal_flux`), in LALSuite's dimensionless Λᵢ (:mod:`pnrotor.pn.energy`).
+* the flux into black-hole horizons (``horizon_absorption``), at leading order in the tidal coupling, for spins
+  along ℓ̂: Alvi 2001 (gr-qc/0107080) (:func:`horizon_flux`).
 
 Note on LALSuite: its orbit-averaged 3PN quadrupole-monopole coefficient of (ℓ̂·Sᵢ)²,
 ``XLALSimInspiralPNFlux_6PNQMS1OS1OCoeffAvg``, has the constant 12.9/8 = 129/80 where the
@@ -30,7 +34,7 @@ import math
 import numpy as np
 
 from .energy import EULER_GAMMA, LN2, PI2
-from .series import assemble, shape_of
+from .series import NK, add_tidal, assemble, shape_of
 
 PI = math.pi
 LN3 = math.log(3.0)
@@ -39,8 +43,8 @@ LN3 = math.log(3.0)
 def nonspinning_flux_coefficients(nu):
     """(f, flog): F̂ coefficients of v^k and of v^k ln v, nonspinning, through 4.5PN (for an array of ν, f[k]
     is an array like it)."""
-    f = np.zeros((10,) + shape_of(nu))
-    flog = np.zeros((10,) + shape_of(nu))
+    f = np.zeros((NK,) + shape_of(nu))
+    flog = np.zeros((NK,) + shape_of(nu))
     f[0] = 1.0
     # 1PN: −1247/336 − 35ν/12                                    [Blanchet 2014, Eq. (314)]
     f[2] = -1247.0 / 336.0 - 35.0 / 12.0 * nu
@@ -133,7 +137,46 @@ def spin1_spin2_flux(nu):
     }
 
 
-def flux_series(X1, kappa1=1.0, kappa2=1.0):
-    """F̂(v): every known term (nonspinning to 4.5PN, spin-orbit to 4PN, spin² to 3PN), untruncated."""
-    return assemble(X1, kappa1, kappa2, nonspinning_flux_coefficients, spin_orbit_flux_sl_sigma,
-                    spin_spin_flux_per_body, spin1_spin2_flux)
+def tidal_flux(X):
+    """{k: c_k} with F̂ ∋ Λ c_k v^k for the body of mass fraction X and dimensionless deformability Λ.
+
+    Vines, Flanagan & Hinderer 2011, arXiv:1101.1673, Eq. (3.6) ((3.7) on arXiv), for their body 2:
+    F̂ ∋ [(18 − 12χ₂)/χ₂] λ̂ + [(−704 − 1803χ₂ + 4501χ₂² − 2170χ₂³)/(28χ₂)] λ̂ x with χᵢ = mᵢ/M,
+    λ̂ = λ₂x⁵/M⁵ = Λ₂χ₂⁵v¹⁰ (their normalization as in :func:`pnrotor.pn.energy.tidal_energy`); for the body X:
+    """
+    X4 = (X * X) * (X * X)
+    return {
+        # 5PN: (18 − 12X) X⁴                                             [Vines+ 2011, Eq. (3.6)]
+        10: (18.0 - 12.0 * X) * X4,
+        # 6PN: (−704 − 1803X + 4501X² − 2170X³) X⁴/28                   [Vines+ 2011, Eq. (3.6)]
+        12: (-704.0 - 1803.0 * X + 4501.0 * (X * X) - 2170.0 * (X * X * X)) * X4 / 28.0,
+    }
+
+
+def horizon_flux(X, a):
+    """{k: c_k} with F̂_H ∋ c_k v^k: the energy flux into the horizon of the black hole of mass fraction X and spin
+    a = ℓ̂·χ along ℓ̂ (either sign), relative to the Newtonian flux (32/5)ν²v¹⁰, at leading order in the tidal
+    coupling, where it is exact in the spin.
+
+    Alvi 2001 (gr-qc/0107080), Eqs. (10) and (21): Ṁ = φ̇ I₀ (φ̇ − Ω_H) with the tidal field's rotation φ̇ = Ω = v³
+    (the spin along ℓ̂), the horizon's Ω_H = a/(2 r_H), r_H = m(1 + √(1 − a²)), and I₀ = (16/5) ν² v¹² X⁴
+    (1 + √(1 − a²))(1 + 3a²) (M = 1) (the quantities as PostNewtonian.jl's ``tidal_heating`` writes them); in the
+    test-mass limit X → 1 the v⁵ term is Tagoshi, Mano & Takasugi 1997's −(1/4)(q + 3q³) (gr-qc/9711072) and the
+    nonspinning v⁸ term Poisson & Sasaki 1995's 1 (gr-qc/9412027); summed over two nonspinning holes,
+    X₁⁴ + X₂⁴ = 1 − 4ν + 2ν², Nagar & Akcay 2012's leading order (arXiv:1112.2840).
+    """
+    kappa = math.sqrt(max(0.0, 1.0 - a * a))
+    return {
+        # v⁵: −(1/4) X³ a (1 + 3a²), the horizon's rotation (negative: energy extracted for a > 0)   [Alvi 2001]
+        5: -0.25 * X * X * X * a * (1.0 + 3.0 * a * a),
+        # v⁸: (1/2) X⁴ (1 + √(1 − a²))(1 + 3a²), the orbit's                                           [Alvi 2001]
+        8: 0.5 * (X * X) * (X * X) * (1.0 + kappa) * (1.0 + 3.0 * a * a),
+    }
+
+
+def flux_series(X1, kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0):
+    """F̂(v): every known term (nonspinning to 4.5PN, spin-orbit to 4PN, spin² to 3PN, tidal at 5PN and 6PN),
+    untruncated."""
+    F = assemble(X1, kappa1, kappa2, nonspinning_flux_coefficients, spin_orbit_flux_sl_sigma,
+                 spin_spin_flux_per_body, spin1_spin2_flux)
+    return add_tidal(F, X1, 1.0 - X1, lambda1, lambda2, tidal_flux)

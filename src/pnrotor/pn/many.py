@@ -308,13 +308,13 @@ def _collector_paused():
             gc.enable()
 
 
-def _first_error(opts, m1, m2, chi1, chi2, f_ref, f, ell_hat, n_hat, kappa1, kappa2):
+def _first_error(opts, m1, m2, chi1, chi2, f_ref, f, ell_hat, n_hat, kappa1, kappa2, lambda1, lambda2):
     """The message of the first check ``evolve``'s settings fail for this binary with the target f as f_max (f_min
     below f_ref), or None: for a binary that is invalid, its own message unless the target's check comes first."""
     backward = f < f_ref
     try:
         binary_settings(opts, m1, m2, chi1, chi2, f_ref, f if backward else None, None if backward else f, ell_hat,
-                        n_hat, kappa1, kappa2)
+                        n_hat, kappa1, kappa2, lambda1, lambda2)
     except ValueError as e:
         return str(e)
     return None
@@ -341,7 +341,8 @@ def _refused_targets(f, m1, m2, f_ref):
 def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_hat=(0.0, 0.0, 1.0),
                 n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, approximant="T4", pn_order=3.5,
                 spin_orbit_order=None, spin_spin_order=None, atol=1e-12, rtol=0.0, rotor="coprecessing",
-                precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000):
+                precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000,
+                lambda1=0.0, lambda2=0.0, tidal_order=None):
     r"""Evolve N binaries from f_ref → :class:`Population` of their states at the end of the inspiral, at
     f_end or at a list of frequencies (module docstring).
 
@@ -366,8 +367,10 @@ def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_
         ℓ̂ and n̂ at f_ref.
     kappa1, kappa2 : array_like (N,) or scalar
         Spin-induced quadrupole constants.
+    lambda1, lambda2 : array_like (N,) or scalar
+        Dimensionless tidal deformabilities Λᵢ (0 for black holes).
     approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, rotor, precession_phase_shift, \
-integrate_rotor, precession, max_steps
+integrate_rotor, precession, max_steps, tidal_order
         As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
 
     The number of threads is :func:`pnrotor.threads.thread_count`'s (numba's: ``numba.set_num_threads``,
@@ -375,19 +378,21 @@ integrate_rotor, precession, max_steps
     options or array shapes raise a ValueError; an invalid binary does not (module docstring).
     """
     wall0 = time.perf_counter()
-    n = _population_size(dict(m1=m1, m2=m2, f_ref=f_ref, kappa1=kappa1, kappa2=kappa2, f_end=f_end),
+    n = _population_size(dict(m1=m1, m2=m2, f_ref=f_ref, kappa1=kappa1, kappa2=kappa2, lambda1=lambda1,
+                              lambda2=lambda2, f_end=f_end),
                          dict(chi1=chi1, chi2=chi2, ell_hat=ell_hat, n_hat=n_hat), dict(frequencies=frequencies))
     m1a, m2a, fref = (_per_binary(x, n, name, unit=unit) for x, name, unit in
                       ((m1, "m1", "M_sun"), (m2, "m2", "M_sun"), (f_ref, "f_ref", "Hz")))
     targets, listed = _target_table(f_end, frequencies, n)
     K = targets.shape[1]
     k1, k2 = _per_binary(kappa1, n, "kappa1"), _per_binary(kappa2, n, "kappa2")
+    l1, l2 = _per_binary(lambda1, n, "lambda1"), _per_binary(lambda2, n, "lambda2")
     c1, c2, ell, nh = (_per_binary(x, n, name, (3,)) for x, name in
                        ((chi1, "chi1"), (chi2, "chi2"), (ell_hat, "ell_hat"), (n_hat, "n_hat")))
     shared = dict(approximant=approximant, pn_order=pn_order, spin_orbit_order=spin_orbit_order,
                   spin_spin_order=spin_spin_order, atol=atol, rtol=rtol, sampling="final", rotor=rotor,
                   precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
-                  precession=precession, max_steps=max_steps)
+                  precession=precession, max_steps=max_steps, tidal_order=tidal_order)
     # the shared options fail for every binary alike: check them once (a binary of the table could itself be
     # invalid, which must not raise); a reference binary carries them to population_parts
     opts = options(**shared)
@@ -409,8 +414,8 @@ integrate_rotor, precession, max_steps
     # per binary in Python floats and lists, for the lists of targets and the refusals (numpy on a few numbers costs
     # ~0.5-1 µs per operation); with the collector paused: the lists cost 14 µs per binary with it walking them
     with _collector_paused():
-        f_all, m1l, m2l, frl, k1l, k2l, c1l, c2l, elll, nhl = (x.tolist() for x in (targets, m1a, m2a, fref, k1, k2,
-                                                                                    c1, c2, ell, nh))
+        f_all, m1l, m2l, frl, k1l, k2l, l1l, l2l, c1l, c2l, elll, nhl = (
+            x.tolist() for x in (targets, m1a, m2a, fref, k1, k2, l1, l2, c1, c2, ell, nh))
     kmax = kmax_of(reference)
     mode = {aligned: output_mode(aligned, reference.rotor) for aligned in (True, False)}
     skips, aheads, behinds = [{}] * n, [None] * n, [None] * n   # per binary: a list's refused targets, the others
@@ -418,7 +423,7 @@ integrate_rotor, precession, max_steps
     def settings_of(i, f_min, f_max):
         """binary_settings of binary i (a ValueError if it is invalid) with f_min and f_max (NaN: none)."""
         return binary_settings(opts, m1l[i], m2l[i], c1l[i], c2l[i], frl[i], None if f_min != f_min else f_min,
-                               None if f_max != f_max else f_max, elll[i], nhl[i], k1l[i], k2l[i])
+                               None if f_max != f_max else f_max, elll[i], nhl[i], k1l[i], k2l[i], l1l[i], l2l[i])
 
     def refuse(i, e):
         """Binary i invalid (the ValueError e): its message on its rows, or a refused target's where that check
@@ -426,7 +431,7 @@ integrate_rotor, precession, max_steps
         out.message[i * K:(i + 1) * K] = str(e)
         for k, why in skips[i].items():
             if _first_error(opts, m1l[i], m2l[i], c1l[i], c2l[i], frl[i], f_all[i][k], elll[i], nhl[i], k1l[i],
-                            k2l[i]) not in (None, str(e)):
+                            k2l[i], l1l[i], l2l[i]) not in (None, str(e)):
                 out.message[i * K + k] = why
 
     integrating = 0.0
@@ -452,14 +457,15 @@ integrate_rotor, precession, max_steps
                 f_lo, f_hi = np.where(back, f, np.nan), np.where(back, np.nan, f)
             b = population_settings(opts, m1a[start:stop], m2a[start:stop], c1[start:stop], c2[start:stop],
                                     fref[start:stop], f_lo, f_hi, ell[start:stop], nh[start:stop], k1[start:stop],
-                                    k2[start:stop])
+                                    k2[start:stop], l1[start:stop], l2[start:stop])
             for j in np.flatnonzero(~b.valid).tolist():   # binary_settings decides and words the refusals
                 try:
                     b.put(j, settings_of(start + j, f_lo[j].item(), f_hi[j].item()))
                 except ValueError as e:
                     refuse(start + j, e)
             with np.errstate(all="ignore"):
-                parts = population_parts(reference, X1[start:stop], k1[start:stop], k2[start:stop])
+                parts = population_parts(reference, X1[start:stop], k1[start:stop], k2[start:stop], l1[start:stop],
+                                         l2[start:stop])
             for aligned in (True, False):
                 g = np.flatnonzero(b.valid & (b.aligned == aligned))   # rows of the chunk with this right-hand side
                 if not g.size:

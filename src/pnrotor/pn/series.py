@@ -7,7 +7,8 @@ right-hand sides in :mod:`pnrotor.pn.system`:
 
       Σ_k v^k Σ_b B_b (C[k, b, 0] + C[k, b, 1] ln v),
 
-  a relative expansion in v (k = 0 … 9, i.e. through 4.5PN) whose coefficients are linear combinations
+  a relative expansion in v (k = 0 … 12: the point-particle and spin terms through 4.5PN, k ≤ 9, and the
+  tidal terms of neutron stars at 5PN and 6PN, k = 10 and 12) whose coefficients are linear combinations
   of the spin invariants ``B`` below and may carry one power of ln v;
 * the assembly of one quantity's series (Ê, F̂) from its coefficient functions (:func:`assemble`), the
   spin-orbit terms converted from Bohé et al.'s s_ℓ, σ_ℓ and the spin-spin terms from Sᵢ = Xᵢ²χᵢ;
@@ -34,6 +35,11 @@ an order < 0 removes that spin power entirely.  Applying the rule to the inputs 
 of a product or ratio is the same as truncating the exact series, because every product raises both
 k and the spin power.
 
+Tidal terms (linear in the deformabilities Λᵢ, spin-independent, b = 0) are the terms with k ≥ TIDAL_K = 10:
+no point-particle term reaches that power, so the rule above (k ≤ kmax[0] ≤ 9) drops them, and a fourth entry
+``kmax[3]`` (the tidal order × 2, or −1) keeps them separately: :func:`pnrotor.pn.system._add_tides` carries them
+through the approximants' ratios to first order in Λ.
+
 The logarithm ln v is treated as an O(1) number (its coefficient is part of the v^k coefficient), the
 convention of LALSuite's TaylorT4 and of PostNewtonian.jl's ``truncated_series_ratio``.  Products of
 two logarithms first occur at v¹² and are outside this representation (checked).
@@ -45,7 +51,8 @@ import math
 import numpy as np
 from numba import njit
 
-NK = 10  # powers v^0 … v^9 (through 4.5PN)
+NK = 13  # powers v^0 … v^12 (point particles through 4.5PN, k ≤ 9; tides at 5PN and 6PN, k = 10, 12)
+TIDAL_K = 10  # the first power of the tidal terms (Vines, Flanagan & Hinderer 2011): b = 0 terms with k ≥ 10
 NB = 9   # spin-invariant basis, see module docstring
 NL = 2   # powers of ln v: 0 and 1
 SERIES_HEADER = 5  # (n, s₀, s₁, l₀, l₁) before a series stored in p, see fold_and_store
@@ -67,7 +74,7 @@ PROD[B_A2, B_A1] = B_A1A2
 PROD[B_A2, B_A2] = B_A2A2
 del _b
 
-MAX_ORDER = (NK - 1) / 2.0  # 4.5PN
+MAX_ORDER = 4.5  # the highest point-particle order (k = 9)
 
 
 def shape_of(x):
@@ -126,24 +133,41 @@ def add_spin_spin(C, X1, X2, per_body_1, per_body_2, s1s2):
     return C
 
 
-def kmax_from_orders(pn_order, so_order, ss_order):
-    """Largest kept power of v for spin power 0, 1, 2 (−1: nothing of that spin power), a new int64 array."""
-    return np.array(_kmax(pn_order, so_order, ss_order), dtype=np.int64)
+def add_tidal(C, X1, X2, lambda1, lambda2, per_body):
+    """Add the tidal terms Σᵢ Λᵢ c_k(Xᵢ) v^k to C (b = 0; arrays X1, Λ: one binary each, elementwise), from
+    ``per_body(X)`` → {k: c_k} per unit dimensionless deformability Λ of the body of mass fraction X
+    (:func:`pnrotor.pn.energy.tidal_energy`, :func:`pnrotor.pn.flux.tidal_flux`); one binary without tides
+    skips them (its ~10 µs; adding the zeros would give the same numbers)."""
+    if not (shape_of(X1) or lambda1 or lambda2):
+        return C
+    for k, c in per_body(X1).items():
+        C[k, B_ONE, 0] += lambda1 * c
+    for k, c in per_body(X2).items():
+        C[k, B_ONE, 0] += lambda2 * c
+    return C
+
+
+def kmax_from_orders(pn_order, so_order, ss_order, tidal_order=0.0):
+    """Largest kept power of v for spin power 0, 1, 2 and of the tidal terms (−1: none of them), a new int64 array
+    of 4: the tidal terms start at 5PN (k = 10), so a tidal order below 5 keeps none."""
+    return np.array(_kmax(pn_order, so_order, ss_order, tidal_order), dtype=np.int64)
 
 
 @functools.lru_cache(maxsize=32)
-def _kmax(pn_order, so_order, ss_order):
+def _kmax(pn_order, so_order, ss_order, tidal_order):
     """:func:`kmax_from_orders` as a tuple, cached: every run of a population asks for the same orders, and the
     checks cost ~1.5 µs (equal keys give equal results: −0.0 and 0.0 are both kept orders)."""
     out = []
-    for order in (pn_order, so_order, ss_order):
+    for j, order in enumerate((pn_order, so_order, ss_order, tidal_order)):
         if order is None or order < 0:
             out.append(-1)
         else:
             twice = 2.0 * float(order)
             if abs(twice - round(twice)) > 1e-12:
                 raise ValueError(f"PN orders must be multiples of 0.5, got {order!r}")
-            out.append(min(int(round(twice)), NK - 1))
+            out.append(min(int(round(twice)), NK - 1 if j == 3 else TIDAL_K - 1))
+    if out[3] < TIDAL_K:
+        out[3] = -1
     return tuple(out)
 
 
@@ -181,11 +205,19 @@ def _accumulate_product(out, A, B, ka, kb, sign):
 
 
 @njit(cache=True)
+def _top(kmax):
+    """The highest power of v that ``kmax`` keeps of any spin power (what :func:`truncate` reads; a series' higher
+    powers are not computed: products of two logarithms first occur at v¹², past the point-particle orders)."""
+    return min(max(kmax[0], kmax[1], kmax[2]), NK - 1)
+
+
+@njit(cache=True)
 def multiply(A, B, kmax):
     """Truncated product A·B."""
     out = np.zeros((NK, NB, NL))
-    for ka in range(NK):
-        for kb in range(NK - ka):
+    top = _top(kmax)
+    for ka in range(top + 1):
+        for kb in range(top + 1 - ka):
             _accumulate_product(out, A, B, ka, kb, 1.0)
     return truncate(out, kmax)
 
@@ -205,7 +237,7 @@ def divide(N, D, kmax):
     if d0 == 0.0:
         raise ValueError("divide: the denominator has a vanishing leading coefficient")
     Q = np.zeros((NK, NB, NL))
-    for k in range(NK):
+    for k in range(_top(kmax) + 1):
         for b in range(NB):
             for l in range(NL):
                 Q[k, b, l] = N[k, b, l]

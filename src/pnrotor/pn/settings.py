@@ -45,7 +45,8 @@ class Settings:
     'final', 'dt' (``sampling_value`` Δt in s) or 'per_orbit' (``sampling_value`` n); ``ell_hat``,
     ``n_hat`` are exactly orthonormal and R0 maps x̂ → n̂, ẑ → ℓ̂; ``spin_content`` is 'nonspinning',
     'aligned' or 'precessing' (aligned spins have their round-off in-plane parts removed); ``M_sec`` is
-    G M/c³ in s, ``X1`` = m₁/M, ``nu`` = X₁X₂."""
+    G M/c³ in s, ``X1`` = m₁/M, ``nu`` = X₁X₂; ``lambda1``, ``lambda2`` the dimensionless tidal deformabilities Λᵢ
+    and ``tidal_order`` 0, 5 or 6."""
 
     m1: float
     m2: float
@@ -58,10 +59,13 @@ class Settings:
     n_hat: np.ndarray
     kappa1: float
     kappa2: float
+    lambda1: float
+    lambda2: float
     approximant: str    # from here to max_steps: the fields of Options, in its order
     pn_order: float
     spin_orbit_order: float
     spin_spin_order: float
+    tidal_order: float
     atol: float
     rtol: float
     sampling: str
@@ -71,6 +75,7 @@ class Settings:
     integrate_rotor: bool
     precession: str
     max_steps: int
+    horizon_absorption: bool
     M_sec: float
     X1: float
     nu: float
@@ -95,11 +100,13 @@ class Settings:
             "f_max_Hz": nan if self.f_max is None else self.f_max, "approximant": self.approximant,
             "pn_order": self.pn_order, "spin_orbit_order": self.spin_orbit_order,
             "spin_spin_order": self.spin_spin_order, "ell_hat": self.ell_hat.tolist(), "n_hat": self.n_hat.tolist(),
-            "kappa1": self.kappa1, "kappa2": self.kappa2, "atol": float(self.atol), "rtol": float(self.rtol),
+            "kappa1": self.kappa1, "kappa2": self.kappa2, "lambda1": self.lambda1, "lambda2": self.lambda2,
+            "tidal_order": self.tidal_order, "atol": float(self.atol), "rtol": float(self.rtol),
             "sampling": self.sampling,
             "sampling_value": nan if self.sampling_value is None else float(self.sampling_value),
             "rotor": self.rotor, "precession_phase_shift": bool(self.precession_phase_shift),
             "integrate_rotor": bool(self.integrate_rotor), "precession": self.precession,
+            "horizon_absorption": bool(self.horizon_absorption),
             "max_steps": int(self.max_steps), "M_seconds": self.M_sec, "v_ref": self.v0,
             "spin_content": self.spin_content, "state": "aligned" if self.use_aligned else "precessing",
         }
@@ -114,6 +121,7 @@ class Options(NamedTuple):
     pn_order: float
     spin_orbit_order: float
     spin_spin_order: float
+    tidal_order: float
     atol: float
     rtol: float
     sampling: str
@@ -123,20 +131,23 @@ class Options(NamedTuple):
     integrate_rotor: bool
     precession: str
     max_steps: int
+    horizon_absorption: bool = False
 
 
 def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, spin_orbit_order,
              spin_spin_order, ell_hat, n_hat, kappa1, kappa2, atol, rtol, sampling, rotor, precession_phase_shift,
-             integrate_rotor, precession, max_steps):
+             integrate_rotor, precession, max_steps, lambda1=0.0, lambda2=0.0, tidal_order=None,
+             horizon_absorption=False):
     """Check and convert :func:`pnrotor.pn.evolve.evolve`'s arguments (its docstring has their meaning and
     defaults) → :class:`Settings`; a ``ValueError`` naming the first bad one (the options first)."""
     o = options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, sampling, rotor,
-                precession_phase_shift, integrate_rotor, precession, max_steps)
-    return binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2)
+                precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order, horizon_absorption)
+    return binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1,
+                           lambda2)
 
 
 def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, sampling, rotor,
-            precession_phase_shift, integrate_rotor, precession, max_steps):
+            precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order=None, horizon_absorption=False):
     """:class:`Options` from ``evolve``'s keywords of the same names; a ``ValueError`` naming the first bad one."""
     approximant = normalize_approximant(approximant)
     pn_order = _order(pn_order, "pn_order", 0.0, MAX_ORDER)
@@ -144,6 +155,7 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
                 else _order(spin_orbit_order, "spin_orbit_order", -1.0, MAX_SO_ORDER))
     ss_order = (min(pn_order, MAX_SS_ORDER) if spin_spin_order is None
                 else _order(spin_spin_order, "spin_spin_order", -1.0, MAX_SS_ORDER))
+    tidal_order = _tidal_order(tidal_order)
     if rotor not in ROTORS:
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     mode, sval = parse_sampling(sampling)
@@ -164,23 +176,32 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
         precession_phase_shift = False
     if precession_phase_shift is None:
         precession_phase_shift = so_order >= 3.0
-    return Options(approximant, pn_order, so_order, ss_order, atol, rtol, mode, sval, rotor, precession_phase_shift,
-                   integrate_rotor, precession, int(max_steps))
+    if not isinstance(horizon_absorption, _ini._BOOLS):
+        raise ValueError(f"horizon_absorption must be True or False, got {horizon_absorption!r}")
+    return Options(approximant, pn_order, so_order, ss_order, tidal_order, atol, rtol, mode, sval, rotor,
+                   precession_phase_shift, integrate_rotor, precession, int(max_steps), bool(horizon_absorption))
 
 
-def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2):
+def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1=0.0,
+                    lambda2=0.0):
     """:class:`Settings` of one binary run with :class:`Options` ``o`` (the rest of :func:`settings`'s checks,
     those of the binary; ``evolve_many`` checks the options once and calls this per binary)."""
     m1, m2, f_ref, f_min, f_max = masses_and_frequencies(m1, m2, f_ref, f_min, f_max)
     c1 = _ini.spin_vector(chi1, "chi1")
     c2 = _ini.spin_vector(chi2, "chi2")
     ell, n = _ini.orthonormal_frame(ell_hat, n_hat)
-    kappa1 = _kappa(kappa1, "kappa1")
-    kappa2 = _kappa(kappa2, "kappa2")
+    kappa1 = _nonnegative(kappa1, "kappa1", _KAPPA)
+    kappa2 = _nonnegative(kappa2, "kappa2", _KAPPA)
+    lambda1 = _nonnegative(lambda1, "lambda1", _LAMBDA)
+    lambda2 = _nonnegative(lambda2, "lambda2", _LAMBDA)
     M_sec, X1, v0, v_min, v_max = frequencies(m1, m2, f_ref, f_min, f_max)
     spin_content, c1, c2 = _spin_content(c1, c2, ell)
-    return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, ell, n, kappa1, kappa2, *o, M_sec, X1, X1 * (1.0 - X1), v0,
-                    v_min, v_max, _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
+    if o.horizon_absorption and (spin_content == "precessing" or o.integrate_rotor):
+        raise ValueError("horizon_absorption takes nonspinning binaries and spins along ell_hat (the flux into a "
+                         "tilted horizon, averaged over the orbit, is not implemented); these spins precess"
+                         if spin_content == "precessing" else "horizon_absorption needs integrate_rotor=False")
+    return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, ell, n, kappa1, kappa2, lambda1, lambda2, *o, M_sec, X1,
+                    X1 * (1.0 - X1), v0, v_min, v_max, _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
 
 
 class Binaries(NamedTuple):
@@ -210,7 +231,8 @@ class Binaries(NamedTuple):
         self.valid[i] = True
 
 
-def population_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2):
+def population_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1=0.0,
+                        lambda2=0.0):
     """:func:`binary_settings` of n binaries with :class:`Options` ``o`` over float64 arrays ((n,), (n, 3); NaN in
     f_min and f_max for none) → :class:`Binaries`.  Where a binary passes every check of binary_settings, its row is
     valid and holds bitwise that function's numbers (the same operations in the same order, elementwise; pow as
@@ -228,6 +250,7 @@ def population_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_h
 
         ok = positive(m1) & positive(m2) & positive(f_ref) & ~(np.maximum(m1, m2) > MAX_MASS_RATIO * np.minimum(m1, m2))
         ok &= np.isfinite(kappa1) & (kappa1 >= 0.0) & np.isfinite(kappa2) & (kappa2 >= 0.0)
+        ok &= np.isfinite(lambda1) & (lambda1 >= 0.0) & np.isfinite(lambda2) & (lambda2 >= 0.0)
         for c in (chi1, chi2):
             square = c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1] + c[:, 2] * c[:, 2]
             ok &= np.isfinite(c).all(axis=1) & ~(square > 1.0 + 1e-14)
@@ -282,13 +305,30 @@ def _frame_rotor(ell_n):
     return _ini.frame_rotor(ell_n[:3], ell_n[3:])
 
 
-def _kappa(kappa, name):
-    """A spin-induced quadrupole parameter κ: a finite number ≥ 0 (1 for black holes)."""
-    value = _float_or_nan(kappa)
-    if not (math.isfinite(value) and value >= 0.0):
-        raise ValueError(f"{name} must be a finite number >= 0 (1 for a black hole, ~2-20 for neutron stars), "
-                         f"got {kappa!r}")
+TIDAL_ORDERS = (0.0, 5.0, 6.0)
+"""The tidal orders: none, 5PN (leading), 6PN (with the 1PN tidal terms; the default)."""
+
+
+def _tidal_order(x):
+    """A tidal order: 0, 5 or 6 (None: 6)."""
+    if x is None:
+        return 6.0
+    value = _float_or_nan(x)
+    if value not in TIDAL_ORDERS:
+        raise ValueError(f"tidal_order must be 0 (no tides), 5 or 6 (PN orders of the tidal terms; None: 6), got {x!r}")
     return value
+
+
+_KAPPA = "1 for a black hole, ~2-20 for neutron stars"
+_LAMBDA = "the dimensionless tidal deformability: 0 for a black hole, ~10-5000 for neutron stars"
+
+
+def _nonnegative(value, name, meaning):
+    """A finite number ≥ 0: κᵢ (``meaning`` :data:`_KAPPA`) or Λᵢ (:data:`_LAMBDA`)."""
+    x = _float_or_nan(value)
+    if not (math.isfinite(x) and x >= 0.0):
+        raise ValueError(f"{name} must be a finite number >= 0 ({meaning}), got {value!r}")
+    return x
 
 
 def masses_and_frequencies(m1, m2, f_ref, f_min, f_max):

@@ -40,8 +40,9 @@ from numba import njit
 
 from pnrotor import threads
 from pnrotor.quaternion import qrotate_into
-from pnrotor.waveform import nonspinning, spin, wigner
+from pnrotor.waveform import nonspinning, spin, tidal, wigner
 from pnrotor.waveform.layout import mode_index, n_modes
+from pnrotor.waveform.memory import terms as memory_terms
 from pnrotor.waveform.wigner import (_CHUNK, _phase_powers, _rotate_ell, _rotation_scratch, _rotor_block,
                                      _rotor_rows, _store, rotation_plan)
 
@@ -59,52 +60,76 @@ _FRAME_CODES = {"coorbital": 0, "z": 1, "rotors": 2}
 """The frames :func:`_sum` gives the modes in: H, H_ℓm e^{−imΦ} for R = exp(Φẑ/2), 𝔇(R) H."""
 
 
-def table(nu, delta, ell_max, order2, spins):
+NO_TIDES = (0.0, 0.0, -1)
+"""``tides`` of a run without them: (Λ₁, Λ₂, the largest power k of a tidal term kept, −1 none)."""
+TIDAL_K = 10
+"""The tidal terms (:mod:`~pnrotor.waveform.tidal`) are those of k ≥ 10: no other term reaches that power."""
+
+
+def table(nu, delta, ell_max, order2, spins, tides=NO_TIDES, memory=False):
     """(mode row, power k, quantity index, coefficient, parity) arrays of every term kept, m ≥ 0 (module
-    docstring); ``spins`` False leaves the spin terms out."""
+    docstring); ``spins`` False leaves the spin terms out; ``tides`` = (Λ₁, Λ₂, k_max) the tidal terms up to v^k_max
+    (:data:`NO_TIDES`: none); ``memory`` adds the m = 0 memory terms (:mod:`~pnrotor.waveform.memory`)."""
     row_of = mode_index.py_func   # the plain Python function (a compiled call per term would cost ~1 µs)
-    rows = [(row_of(ell, m), k, q, c, parity) for ell, m, k, q, c, parity in _terms(nu, delta, ell_max, order2, spins)]
+    rows = [(row_of(ell, m), k, q, c, parity)
+            for ell, m, k, q, c, parity in _terms(nu, delta, ell_max, order2, spins, tides, memory)]
     row, k, q, c, parity = zip(*rows) if rows else ((), (), (), (), ())
     return (np.array(row, dtype=np.int64), np.array(k, dtype=np.int64), np.array(q, dtype=np.int64),
             np.array(c, dtype=np.complex128), np.array(parity, dtype=np.int64))
 
 
-def _terms(nu, delta, ell_max, order2, spins):
+def _terms(nu, delta, ell_max, order2, spins, tides=NO_TIDES, memory=False):
     """The terms of :func:`table` as a list of Python tuples (ℓ, m, k, q, complex coefficient, parity)."""
-    return [(ell, m, k, q, complex(c), parity) for ell, m, k, q, c, parity in _source_terms(nu, delta, ell_max, spins)
-            if ell <= ell_max and k <= order2 and c != 0]
+    return [(ell, m, k, q, complex(c), parity)
+            for ell, m, k, q, c, parity in _source_terms(nu, delta, ell_max, spins, tides, memory)
+            if _kept(ell, k, ell_max, order2, tides[2]) and c != 0]
 
 
-def _source_terms(nu, delta, ell_max, spins):
+def _kept(ell, k, ell_max, order2, tidal_k):
+    """Whether a term of ℓ and v^k is kept: ℓ ≤ ell_max, k ≤ order2, or for a tidal term (k ≥ TIDAL_K) k ≤ tidal_k."""
+    return ell <= ell_max and k <= (tidal_k if k >= TIDAL_K else order2)
+
+
+def _source_terms(nu, delta, ell_max, spins, tides=NO_TIDES, memory=False):
     """(ℓ, m, k, q, coefficient, parity) of every coefficient the sources give for ``ell_max`` (zeros and terms of
     higher ℓ or order too), in their order: per nonspinning (ℓ, m) and k its a_k (q = 1) and b_k (q = ln v), then
-    with ``spins`` the symmetric and the antisymmetric spin terms.  Which terms these are does not depend on ν, δ."""
+    with ``spins`` the symmetric and the antisymmetric spin terms, with tides (k_max ≥ TIDAL_K) the tidal terms,
+    with ``memory`` the memory terms.  Which terms these are does not depend on ν, δ or the Λᵢ."""
     out = [(ell, m, k, q, c, 1) for (ell, m), series in nonspinning.terms(nu, delta, ell_max).items()
            for k, a, b in series for q, c in ((_Q_ONE, a), (_Q_LOG, b))]
     if spins:
         for parity, group in zip((1, -1), spin.terms(nu, delta)):
             out += [(ell, m, k, _Q_SPIN[name], c, parity) for ell, m, k, name, c in group]
+    if tides[2] >= TIDAL_K:
+        out += [(ell, m, k, _Q_ONE, c, 1) for ell, m, k, c in tidal.terms(0.5 * (1.0 + delta), *tides[:2])]
+    if memory:
+        out += [(ell, m, k, _Q_ONE, c, 1) for (ell, m), series in memory_terms(nu).items() for k, c in series]
     return out
 
 
-def _source_values(nu, delta, ell_max, spins):
+def _source_values(nu, delta, ell_max, spins, tides=NO_TIDES, memory=False):
     """The coefficients of :func:`_source_terms` alone, in its order, without its bookkeeping."""
     values = [x for series in nonspinning.terms(nu, delta, ell_max).values() for _, a, b in series for x in (a, b)]
     if spins:
         for group in spin.terms(nu, delta):
             values += [term[4] for term in group]
+    if tides[2] >= TIDAL_K:
+        values += [term[3] for term in tidal.terms(0.5 * (1.0 + delta), *tides[:2])]
+    if memory:
+        values += [c for series in memory_terms(nu).values() for _, c in series]
     return values
 
 
 @lru_cache(maxsize=None)
-def _layout(ell_max, order2, spins, folded):
+def _layout(ell_max, order2, spins, folded, tidal_k, memory):
     """What of :func:`_real_terms` depends only on its options (``folded``: spin quantities folded into the
-    coefficients): the source coefficients kept (:func:`_source_terms` positions: ℓ ≤ ell_max, k ≤ order2); for
-    their real parts, then their imaginary parts, the sum each adds to; the sums' (ℓ, target, k, q), sorted; and
-    the spin quantity q ≥ 2 of each kept coefficient (else 0)."""
+    coefficients): the source coefficients kept (:func:`_source_terms` positions: ℓ ≤ ell_max, k ≤ order2, tidal
+    terms to tidal_k); for their real parts, then their imaginary parts, the sum each adds to; the sums' (ℓ,
+    target, k, q), sorted; and the spin quantity q ≥ 2 of each kept coefficient (else 0)."""
     n_pow = 2 * ell_max + 1
     kept = [(j, ell, m, k, q, parity) for j, (ell, m, k, q, _, parity) in
-            enumerate(_source_terms(0.2, 0.3, ell_max, spins)) if ell <= ell_max and k <= order2]
+            enumerate(_source_terms(0.2, 0.3, ell_max, spins, (1.0, 1.0, tidal_k), memory))
+            if _kept(ell, k, ell_max, order2, tidal_k)]
     keys = [(ell, (ell + m if parity > 0 else ell - m) + part * n_pow, k, _Q_ONE if folded and q >= 2 else q)
             for part in (0, 1) for _, ell, m, k, q, parity in kept]
     sums = sorted(set(keys))
@@ -116,7 +141,7 @@ def _layout(ell_max, order2, spins, folded):
 
 
 @lru_cache(maxsize=64)
-def _real_terms(nu, delta, ell_max, order2, spins, constants):
+def _real_terms(nu, delta, ell_max, order2, spins, constants, tides=NO_TIDES, memory=False):
     """:func:`table`'s terms as the kernel adds them: (ell_start, target, k, q, c, plan), real terms
     sorted by ℓ (those of ℓ are ell_start[ℓ] : ell_start[ℓ+1]), target the row of the block array (ℓ ± m for
     the real part, 2 ell_max + 1 more for the imaginary part); the spin quantities q ≥ 2 folded into c if
@@ -128,8 +153,8 @@ def _real_terms(nu, delta, ell_max, order2, spins, constants):
     machine: ℓ ≤ 4 at 1.5PN 67-69 µs, ℓ ≤ 8 at 3.5PN 99-103 µs, against 105-192 and 212-385 µs with every term
     summed into a dict, and every ℓ ≤ 8 of the sources evaluated for any ℓ_max)."""
     n_pow = 2 * ell_max + 1
-    kept, into, (ell, target, k, q), spin_q = _layout(ell_max, order2, spins, constants is not None)
-    c = np.array(_source_values(nu, delta, ell_max, spins), dtype=np.complex128)[kept]
+    kept, into, (ell, target, k, q), spin_q = _layout(ell_max, order2, spins, constants is not None, tides[2], memory)
+    c = np.array(_source_values(nu, delta, ell_max, spins, tides, memory), dtype=np.complex128)[kept]
     parts = np.concatenate((c.real, c.imag))
     if constants is not None:
         factor = np.array((1.0,) + constants[1:])[spin_q]   # constants[q] for q ≥ 2, else 1
@@ -282,13 +307,15 @@ def _sum(v, chi1, chi2, R, spins, frame, h0, scale, logs, X1, X2, kappa1, kappa2
 
 
 def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None, frame="coorbital",
-                   scale=1.0):
+                   scale=1.0, tides=NO_TIDES, memory=False):
     """The modes (n_modes, N) complex, C-contiguous, rows in :func:`~pnrotor.waveform.layout.mode_index` order,
     of samples v (N,) for masses m1, m2 (any unit), ℓ ≤ ell_max and amplitude order order2/2, times ``scale``,
     in ``frame``: "coorbital" (H_ℓm), "rotors" (𝔇(R) H for the orbital-frame rotors R (N, 4)) or "z" (the
     same for rotors about ẑ, R = exp(Φẑ/2): H_ℓm e^{−imΦ}).  Spins chi1, chi2: None (nonspinning), (3,) the
     same at every sample along (n̂, λ̂, ℓ̂), or (N, 3) per sample, along (n̂, λ̂, ℓ̂) or, given R, in the
-    inertial frame (projected per sample in the kernel)."""
+    inertial frame (projected per sample in the kernel).  ``tides`` = (Λ₁, Λ₂, k_max): the tidal terms of
+    :mod:`~pnrotor.waveform.tidal` up to v^k_max (:data:`NO_TIDES`: none); ``memory``: the m = 0 memory terms of
+    :mod:`~pnrotor.waveform.memory` (a function of v alone: any block of samples on its own)."""
     if not getattr(_sum, "overloads", True):   # the CLI may be compiling them aside: load them, not compile twice
         from pnrotor import numba_cache
 
@@ -307,7 +334,7 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
                     float(kappa2), True, Q)
         constants = tuple(Q[:, 0].tolist())
     ell_start, target, k, q, c, plan = _real_terms(nu, delta, int(ell_max), int(order2), chi1 is not None,
-                                                   constants)
+                                                   constants, tuple(tides), bool(memory))
     chi1, chi2 = (empty, empty) if not spins else (np.ascontiguousarray(x, dtype=np.float64) for x in (chi1, chi2))
     R = np.zeros((0, 4)) if R is None else np.ascontiguousarray(R, dtype=np.float64)
     out = np.empty((n_modes(ell_max), v.size), dtype=np.complex128)
@@ -326,9 +353,11 @@ def compile_kernels():
                    frame="rotors")
 
 
-def coorbital_modes(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None):
+def coorbital_modes(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None, tides=NO_TIDES,
+                    memory=False):
     """H_ℓm (n_modes, N) complex, C-contiguous, rows in :func:`~pnrotor.waveform.layout.mode_index` order, of
     samples v (N,) with spins chi1, chi2 (N, 3) along (n̂, λ̂, ℓ̂) (None for a nonspinning run) — or, given the
     orbital-frame rotors R (N, 4), in the inertial frame, projected per sample in the kernel (no temporary
-    arrays) — masses m1, m2 (any unit), ℓ ≤ ell_max and amplitude order order2/2."""
-    return modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1, kappa2, R=R)
+    arrays) — masses m1, m2 (any unit), ℓ ≤ ell_max, amplitude order order2/2, ``tides`` and ``memory`` as
+    :func:`modes_in_frame`'s."""
+    return modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1, kappa2, R=R, tides=tides, memory=memory)

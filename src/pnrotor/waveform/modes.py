@@ -188,8 +188,8 @@ def check_arguments(ell_max, amplitude_order, distance=None):
         order2 = 2.0 * float(amplitude_order) if _real(amplitude_order) else math.nan   # no str, bytes or bools
     except OverflowError:   # an int beyond any float (10**400)
         order2 = math.nan
-    if not order2 in range(8):
-        raise ValueError(f"amplitude_order must be one of 0, 0.5, ..., 3.5; got {amplitude_order!r}")
+    if not order2 in range(9):
+        raise ValueError(f"amplitude_order must be one of 0, 0.5, ..., 4; got {amplitude_order!r}")
     return int(ell_max), int(order2), None if distance is None else _megaparsecs(distance)
 
 
@@ -203,7 +203,18 @@ def _check_memory(count, samples, what):
                          f"sampling")
 
 
-def _inertial(evolution, ell_max, order2, scale):
+def _tides(inputs, tidal_order):
+    """``tides`` of :func:`pnrotor.waveform.amplitudes.modes_in_frame` for a run's inputs: (Λ₁, Λ₂, the largest
+    power of v of a tidal term), to ``tidal_order`` (None: the run's own; 0, 5 or 6), none without deformabilities
+    (or in a file written before them)."""
+    from pnrotor.pn.settings import _tidal_order
+
+    order = inputs.get("tidal_order", 0.0) if tidal_order is None else _tidal_order(tidal_order)
+    lambdas = (float(inputs.get("lambda1", 0.0)), float(inputs.get("lambda2", 0.0)))
+    return (*lambdas, int(2 * order)) if order and any(lambdas) else (0.0, 0.0, -1)
+
+
+def _inertial(evolution, ell_max, order2, scale, tides, memory):
     """h = 𝔇(R) H times ``scale``, in one pass of the amplitude kernel.  For a nonprecessing run the spins are
     constant along ℓ̂ (folded into the coefficients) and R = R₀ exp(Φẑ/2) with R₀ the initial frame, so in the
     default frame (R₀ = 1) h = H e^{−imΦ} (frame "z")."""
@@ -222,22 +233,32 @@ def _inertial(evolution, ell_max, order2, scale):
         if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]):
             frame = "z"
     return modes_in_frame(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
-                          inputs["kappa1"], inputs["kappa2"], R=evolution.R, frame=frame, scale=scale)
+                          inputs["kappa1"], inputs["kappa2"], R=evolution.R, frame=frame, scale=scale, tides=tides,
+                          memory=memory)
 
 
-def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
+def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None, tidal_order=None, memory=False):
     """Inertial-frame modes h_ℓm of ``evolution`` (module docstring) for ℓ ≤ ``ell_max`` (2 … 8) with
-    amplitude terms through ``amplitude_order`` (0 … 3.5 in steps of 0.5), as strain at ``distance``
-    (Mpc or an astropy length) or, without one, as r h / M.  Returns :class:`Modes`."""
+    amplitude terms through ``amplitude_order`` (0 … 4 in steps of 0.5; the 4PN term is (2,2)'s), as strain at ``distance``
+    (Mpc or an astropy length) or, without one, as r h / M.  For a run with tidal deformabilities, the tidal
+    amplitude terms (:mod:`pnrotor.waveform.tidal`) to ``tidal_order`` (0: none, 5 or 6; None: the run's
+    tidal order).  ``memory=True`` adds the nonlinear memory to the m = 0 modes (Favata 2009's closed form to
+    the amplitude order, at most 3PN: :mod:`pnrotor.waveform.memory`, which states its convention for the
+    start of the run: the memory accumulated since t → −∞).  Returns :class:`Modes`."""
     if not isinstance(evolution, Evolution):
         raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads), got "
                         f"{type(evolution).__name__}")
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
-    _check_memory(n_modes(ell_max), len(evolution), "modes()")
+    if not isinstance(memory, (bool, np.bool_)):
+        raise ValueError(f"memory must be True or False, got {memory!r}")
     inputs = evolution.inputs
+    tides = _tides(inputs, tidal_order)
+    _check_memory(n_modes(ell_max), len(evolution), "modes()")
     scale = 1.0 if distance_Mpc is None else _scale(None, distance_Mpc, inputs["M_seconds"])
-    h = _inertial(evolution, ell_max, order2, scale)
+    h = _inertial(evolution, ell_max, order2, scale, tides, bool(memory))
     return Modes(t=evolution.t, t_seconds=evolution.t_seconds, ell_max=ell_max, data=h, frame="inertial",
                  R=evolution.R, Phi=evolution.Phi, distance_Mpc=distance_Mpc,
                  inputs=dict(inputs, ell_max=ell_max, amplitude_order=order2 / 2,
-                             distance_Mpc=np.nan if distance_Mpc is None else distance_Mpc))
+                             distance_Mpc=np.nan if distance_Mpc is None else distance_Mpc,
+                             **({"tidal_amplitude_order": tides[2] / 2} if tides[2] > 0 else {}),
+                             **({"memory": True} if memory else {})))

@@ -1,4 +1,4 @@
-r"""Nonspinning co-orbital mode amplitudes H_ℓm of a quasi-circular binary, through 3PN (3.5PN for (2,2)).
+r"""Nonspinning co-orbital mode amplitudes H_ℓm of a quasi-circular binary, through 3PN (4PN for (2,2)).
 
 In the co-orbital frame (ẑ = ℓ̂, x̂ = n̂ pointing from body 2 to body 1) the modes are
 
@@ -10,12 +10,15 @@ Blanchet's modes are the negatives of these, as in LALSuite's
 ``XLALCreateSimInspiralPNModeCOMPLEX16TimeSeriesLALConvention``).
 
 Sources: Blanchet, Faye, Iyer & Sinha 2008 (arXiv:0802.1249, the Ĥ_ℓm through 3PN for ℓ ≤ 8;
-reviewed in Blanchet's Living Review 2014), and for (2,2) at 3.5PN Faye, Marsat,
-Blanchet & Iyer 2012 (arXiv:1210.2339); the coefficients as collected in Boyle et al. 2014
+reviewed in Blanchet's Living Review 2014), for (2,2) at 3.5PN Faye, Marsat, Blanchet & Iyer 2012
+(arXiv:1210.2339) and at 4PN Blanchet, Faye, Henry, Larrouturou & Trestini 2023 (arXiv:2304.11186,
+Eq. (6.17), as transcribed by PostNewtonian.jl's mode weights, with ln(16x) = 4 ln 2 + 2 ln v); the
+coefficients as collected in Boyle et al. 2014
 (arXiv:1409.4431, Eqs. (A5)) and PostNewtonian.jl's mode weights, except (2,2) at 3.5PN, where that
 collection has −2459/378 for the −2495/378 of Faye et al.  Checked (tests/test_waveform_amplitudes.py)
 against the PN energy flux of :mod:`pnrotor.pn.flux`, coefficient by coefficient through 3.5PN (which
-is how the −2459/378 showed), and against LALSuite's SpinTaylor modes through 1.5PN for ℓ ≤ 4
+is how the −2459/378 showed; the 4PN (2,2) term at equal masses, where the odd-m modes vanish and every
+other mode that reaches the 4PN flux is known), and against LALSuite's SpinTaylor modes through 1.5PN for ℓ ≤ 4
 (tests/test_waveform_lal.py).  LALSuite's separate ``XLALSimInspiralPNMode{ℓ}{m}`` (Kidder 2008,
 arXiv:0710.0614) agree term by term to ≤ 8e-15 for ℓ ≤ 6 but for these (tests/test_waveform_nonspinning.py,
 which also shows ours right each time): no 3PN term in the odd-m modes and (3,2); the 1PN corrections of
@@ -31,7 +34,9 @@ Left out, on purpose:
 * the tail phase: Blanchet writes the modes with ψ = Φ − 3 v³ (1 − ν v²/2) ln(v²/v₀²); pnrotor, like
   LALSuite's SpinTaylor modes and PostNewtonian.jl, uses the orbital phase Φ itself, so the 1.5PN
   ln-phase is not applied (the 3PN amplitude logarithms, b_k, are kept);
-* the 4PN (v⁸) term of (2,2) (Blanchet et al. 2023): beyond the 3.5PN amplitude order offered.
+* the 3.5PN (v⁷) terms of the odd-m modes ((2,1): Henry, Faye & Blanchet 2022, arXiv:2210.15602; (3,1),
+  (3,3): Faye, Blanchet & Iyer 2015, arXiv:1409.3546), which amplitude order 3.5 and 4 would take: not
+  checked here (the 4PN flux of unequal masses needs the (2,1) term, which we have no transcription of).
 """
 
 import math
@@ -70,7 +75,16 @@ def _up_to_4(nu, delta):
                  # Faye et al. 2012 as quoted in Blanchet's Living Review 2014; PostNewtonian.jl's transcription
                  # has −2459/378 for −2495/378 (tests/test_waveform_amplitudes.py: the 3.5PN flux needs −2495)
                  (7, -2173 * pi / 756 + (-2495 * pi / 378 + 14333 * i / 162) * n + (40 * pi / 27 - 4066 * i / 945) * n ** 2,
-                  0)],
+                  0),
+                 # 4PN: Blanchet et al. 2023, arXiv:2304.11186, Eq. (6.17) (PostNewtonian.jl's transcription); the
+                 # ln(16x) = 4 ln 2 + 2 ln v of its 45796/2205 and 15284/441 ν terms taken apart
+                 (8, -846557506853 / 12713500800 + 45796 * _GAMMA_E / 2205 - 22898 * i * pi / 2205 - 107 * pi ** 2 / 63
+                  + 91592 * _LN2 / 2205
+                  + (-336005827477 / 4237833600 + 15284 * _GAMMA_E / 441 - 219314 * i * pi / 2205
+                     - 9755 * pi ** 2 / 32256 + 30568 * _LN2 / 441) * n
+                  + (256450291 / 7413120 - 1025 * pi ** 2 / 1008) * n ** 2 - 81579187 * n ** 3 / 15567552
+                  + 26251249 * n ** 4 / 31135104,
+                  45796 / 2205 + 15284 * n / 441)],
         (3, 0): [(5, -2 * i * _SQ(6 / 7) * n / 5, 0)],
         (3, 1): [(1, i * d / (12 * _SQ(14)), 0), (3, -i * d * (4 + n) / (18 * _SQ(14)), 0),
                  (4, d * (7 + 5 * i * pi + 10 * _LN2) / (60 * _SQ(14)), 0),
