@@ -56,10 +56,10 @@ def cache_folder(package="ode"):
 def compile_aside(what):
     """Start compiling ``what`` ('core' or 'modes', module docstring) into numba's cache in another process; it
     dies with this one.  Nothing is lost if it fails: the first use then compiles it here."""
-    from pnrotor.batch.backends import _die_with_parent
+    from pnrotor.processes import die_with_parent
 
     _asides[what] = subprocess.Popen([sys.executable, "-c", _ASIDE_CODE[what]], stdin=subprocess.DEVNULL,
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=_die_with_parent)
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=die_with_parent)
 
 
 def wait_for_aside(what):
