@@ -10,9 +10,10 @@ A solver module (:mod:`pnrotor.ode.dop853`, :mod:`pnrotor.ode.bulirsch_stoer`) p
   every right-hand side.  Its arguments are ``functions`` (int64 addresses in the order of
   :data:`FUNCTIONS_LAYOUT`, from :func:`function_addresses`; a solver without events reads the first four), t0, y0,
   t_end, p, atol, rtol (per component), first_step (0: automatic), max_step, max_steps, then its own, among them the
-  output mode (``OUT_STEPS``, ``OUT_TEVAL`` or ``OUT_FINAL``).  It returns t_out, y_out (over-allocated: rows up
-  to ``ivals[IV_NOUT]``), any outputs of its own, and its statistics ``ivals`` (int64, indexed by the ``IV_*``
-  constants, the status a ``STATUS_*`` code of :mod:`~pnrotor.ode.result`) and ``fvals`` (float64, ``FV_*``);
+  output mode (``OUT_STEPS``, ``OUT_TEVAL`` or ``OUT_FINAL``).  It returns a tuple of t_out, y_out (over-allocated:
+  rows up to ``ivals[IV_NOUT]``), its statistics ``ivals`` (int64, indexed by the ``IV_*`` constants, the status a
+  ``STATUS_*`` code of :mod:`~pnrotor.ode.result`) and ``fvals`` (float64, ``FV_*``), and any outputs of its own
+  (DOP853's dense output and event state);
 * a Python entry named after the method, ``name(rhs, t0, y0, t_end, atol, rtol, args, first_step, max_step,
   max_steps, t_eval, after_step, …)``: the arguments of :func:`common_inputs` checked there (a ValueError or
   TypeError naming the bad one), a ValueError for an option the method does not implement, :func:`trivial_result`

@@ -63,17 +63,10 @@ from .result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_ST
                      DenseOutput, contd8)
 
 
-def _core_entry():
-    """The core's compiled entry point (:func:`pnrotor.ode.common.entry_point`): on its first use in a process, a
-    compilation of it that the CLI started in another process (:func:`pnrotor.numba_cache.compile_aside`) is
-    awaited first, so that this one loads it."""
-    return entry_point(core, CORE_SIG, aside="core")
-
-
 def compile_core():
     """Compile the DOP853 core into numba's cache (or load it): what :func:`pnrotor.numba_cache.compile_aside`
-    runs in another process."""
-    _core_entry()
+    runs in another process (as ``'core'``, which :func:`~pnrotor.ode.common.entry_point` awaits in this one)."""
+    entry_point(core, CORE_SIG, "core")
 
 
 def compile_core_parts():
@@ -599,7 +592,7 @@ def run_core(rhs, after_step, events, t0, y0, t_end, p, atol, rtol, first_step, 
     functions by address or checked dispatchers, contiguous float64 arrays, ``mode`` an ``OUT_*`` code) →
     :class:`OdeResult`.  :func:`pnrotor.pn.evolve.integrate_half` calls it directly with inputs its settings
     stage has checked, which saves the 20–40 µs of :func:`dop853`'s validation per half (measured)."""
-    t_out, y_out, seg_t, seg_h, seg_c, iv, fv, y_ev = _core_entry()(
+    t_out, y_out, seg_t, seg_h, seg_c, iv, fv, y_ev = entry_point(core, CORE_SIG, "core")(
         function_addresses(rhs, after_step, events), t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps,
         t_eval, mode, dense, n_events, ev_dir, safety, min_factor, max_factor)
     nseg = int(iv[IV_NSEG])
