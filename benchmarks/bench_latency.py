@@ -27,8 +27,8 @@ import time
 import numpy as np
 
 from pnrotor.ode import AFTER_STEP_SIG, by_address
-from pnrotor.ode.dop853 import (_CORE_SIG, OUT_FINAL, OUT_STEPS, _dop853_core, _entry_point, _function_addresses,
-                                no_after_step)
+from pnrotor.ode.common import OUT_FINAL, OUT_STEPS, entry_point, function_addresses, no_after_step
+from pnrotor.ode.dop853 import CORE_SIG, core
 from pnrotor.pn import evolve, lalsuite_orders
 from pnrotor.pn.evolve import CONTROLLER, Evolution, _stats, build_system, half, integrate_half, termination
 from pnrotor.pn.sampling import sample
@@ -61,13 +61,13 @@ def core_call(s, system, t_eval, dense):
     """The compiled DOP853 core of the forward half with the arguments ``dop853`` would prepare, as a thunk."""
     p, t_end, directions = half(s.v0, s.nu, s.v_min, system.p, True)
     n = system.y0.size
-    functions = _function_addresses(system.rhs, by_address(no_after_step, AFTER_STEP_SIG), system.events)
+    functions = function_addresses(system.rhs, by_address(no_after_step, AFTER_STEP_SIG), system.events)
     args = (functions, 0.0, system.y0, t_end, p,
             np.full(n, s.atol), np.full(n, s.rtol), 0.0, np.inf, s.max_steps, np.empty(0),
             OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, directions.size, directions,
             CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
-    core = _entry_point(_dop853_core, _CORE_SIG)
-    return lambda: core(*args)
+    compiled = entry_point(core, CORE_SIG)
+    return lambda: compiled(*args)
 
 
 def stages(binary, sampling, calls):

@@ -219,7 +219,7 @@ COLD_SCRIPT = textwrap.dedent('''
     rb = ode.bulirsch_stoer(kepler, 0.0, y0, 10.0, atol=1e-10, t_eval="final")
     t3 = time.perf_counter()
     import sys
-    core = sys.modules["pnrotor.ode.dop853"]._dop853_core
+    core = sys.modules["pnrotor.ode.dop853"].core
     hits = sum(core.stats.cache_hits.values())
     misses = sum(core.stats.cache_misses.values())
     print(f"{t1 - t0:.3f} {t2 - t1:.3f} {t3 - t2:.3f} {t3 - t0:.3f} {hits} {misses}")

@@ -136,9 +136,9 @@ def test_importing_the_integrators_and_the_test_binary_compiles_nothing(cold_pyt
     for the two imports on a cold cache, for every `pnrotor verify`, which uses one method and one formulation);
     they are compiled on first use."""
     out = cold_python("import pnrotor.integrate, pnrotor.analytic as a\n"
-                      "from pnrotor.ode.bulirsch_stoer import _bs_core\n"
-                      "from pnrotor.ode.dop853 import _dop853_core\n"
-                      "print(len(_bs_core.overloads), len(_dop853_core.overloads),\n"
+                      "from pnrotor.ode.bulirsch_stoer import core as bs_core\n"
+                      "from pnrotor.ode.dop853 import core as dop853_core\n"
+                      "print(len(bs_core.overloads), len(dop853_core.overloads),\n"
                       "      sum(len(f.overloads) for f in a._RHS.values()))\n")
     assert out.split() == ["0", "0", "0"], out
 

@@ -624,7 +624,7 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     assert capsys.readouterr().err == ("pnrotor: compiling its numba kernels for this machine, once (~10-25 s); "
                                        "later runs load them in ~1-2 s\n")
     assert started == ["core"] and here == ["core parts"]
-    core = Path(numba_cache.cache_folder()) / "dop853._dop853_core-495.py311.nbi"
+    core = Path(numba_cache.cache_folder()) / "dop853.core-262.py311.nbi"
     assert core.parent.parent == in_tmp / "empty-cache"
     core.parent.mkdir(parents=True)
     core.touch()
@@ -650,7 +650,7 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     assert capsys.readouterr().err == ""
 
 
-@pytest.mark.parametrize("what, kernel, package", [("core", "dop853._dop853_core", "ode"),
+@pytest.mark.parametrize("what, kernel, package", [("core", "dop853.core", "ode"),
                                                    ("modes", "amplitudes._sum", "waveform")])
 def test_what_is_compiled_aside_is_what_the_cache_then_holds(tmp_path, monkeypatch, what, kernel, package):
     """compile_aside's process fills the cache it is given (here a fresh one: a real compilation, ~10-15 s)
@@ -669,15 +669,15 @@ def test_what_is_compiled_aside_is_what_the_cache_then_holds(tmp_path, monkeypat
 SHARED = """import sys
 from pnrotor.pn.evolve import evolve
 import pnrotor.ode.dop853
-d = sys.modules["pnrotor.ode.dop853"]
+d, e = sys.modules["pnrotor.ode.dop853"], sys.modules["pnrotor.ode.events"]
 d.compile_core_parts()
 n = len(compiled)
 d.compile_core()
 evolve(10.0, 10.0, (0, 0, 0), (0, 0, 0), 20.0, f_max=30.0)
 evolve(30.0, 10.0, (0.6, 0, 0.2), (0, -0.4, 0.1), 20.0, f_max=30.0, sampling=1 / 256)
-print([c for c in compiled[n:] if any(k in c for k in ("_locate_root", "_append_segment"))])
-print(len(d._locate_root.signatures), len(d._append_segment.signatures))
-print(any("_dop853_core" in c for c in compiled[n:]))
+print([c for c in compiled[n:] if any(k in c for k in ("locate_root", "_append_segment"))])
+print(len(e.locate_root.signatures), len(d._append_segment.signatures))
+print(str(d.core) in compiled[n:])
 """
 
 
@@ -685,7 +685,7 @@ def test_the_core_parts_compiled_here_are_the_ones_the_core_calls(cold_python):
     """What the CLI compiles in this process while another compiles the core (compile_core_parts: two callees the
     core then loads) is compiled for exactly the types the core calls them with: neither is compiled again by the
     core or by evolve (a second signature would be each compiled twice, the time not saved; evolve_many's loop
-    compiles its own _locate_root for a literal event index).  In one fresh process with an empty cache (~30-40 s)."""
+    compiles its own locate_root for a literal event index).  In one fresh process with an empty cache (~30-40 s)."""
     out = cold_python(SHARED)
     assert out.split("\n")[:3] == ["[]", "1 1", "True"], out
 
@@ -728,9 +728,9 @@ def test_the_cache_folder_is_the_one_numba_uses(tmp_path, monkeypatch):
     from numba.core import caching, config
 
     from pnrotor import numba_cache
-    from pnrotor.ode.dop853 import _dop853_core
+    from pnrotor.ode.dop853 import core
     from pnrotor.pn.many import _integrate_all
-    kernels = {"ode": _dop853_core, "pn": _integrate_all}
+    kernels = {"ode": core, "pn": _integrate_all}
 
     def locators(cls):
         return {package: cls(f.py_func, f.py_func.__code__.co_filename).get_cache_path()

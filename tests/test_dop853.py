@@ -389,7 +389,7 @@ def test_a_recompiled_dispatcher_is_looked_up_again():
         dydt[0] = y[1]
         dydt[1] = -p[0] * y[0]
 
-    from pnrotor.ode.dop853 import _CHECKED
+    from pnrotor.ode.common import _CHECKED
 
     a = dop853(rhs, 0.0, [1.0, 0.0], 10.0, atol=1e-12, args=[W])
     first = _CHECKED[rhs]["rhs"]
@@ -670,10 +670,11 @@ def test_compensated_summation_keeps_long_sums_exact():
 
 
 def test_the_core_has_one_compiled_signature_whatever_the_callers_pass():
-    """The core is compiled for _CORE_SIG only and called through that entry point: a user's dispatcher
+    """The core is compiled for CORE_SIG only and called through that entry point: a user's dispatcher
     as rhs adds no overload (one would be cached with a reference to the user's module, which another
     process could not import: a batch then failed every row with ModuleNotFoundError)."""
-    from pnrotor.ode.dop853 import _CORE_SIG, _dop853_core, _entry_point
+    from pnrotor.ode.common import entry_point
+    from pnrotor.ode.dop853 import CORE_SIG, core
 
     @njit(RHS_SIG)
     def decay(t, y, p, dydt):
@@ -681,5 +682,5 @@ def test_the_core_has_one_compiled_signature_whatever_the_callers_pass():
 
     r = dop853(decay, 0.0, [1.0], 1.0, atol=1e-10)
     assert abs(r.y[-1, 0] - math.exp(-1.0)) < 1e-9
-    assert _entry_point(_dop853_core, _CORE_SIG) is not _dop853_core
-    assert list(_dop853_core.overloads) == [tuple(_CORE_SIG.args)]
+    assert entry_point(core, CORE_SIG) is not core
+    assert list(core.overloads) == [tuple(CORE_SIG.args)]

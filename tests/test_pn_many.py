@@ -178,9 +178,9 @@ def test_evolve_many_calls_the_one_compiled_core(cold_python):
     shape-mismatch error path (an array assignment such as N[i] = series: 5.4 s of string formatting in
     system._vdot_series_each)."""
     out = cold_python("from pnrotor.pn import evolve_many\n"
-                      "from pnrotor.ode.dop853 import _dop853_core, _CORE_SIG\n"
+                      "from pnrotor.ode.dop853 import core, CORE_SIG\n"
                       "evolve_many([30.0, 12.0], [10.0, 8.0], [0.6, 0, 0.2], [0, 0, 0.1], 20.0)\n"
-                      "print(list(_dop853_core.overloads) == [tuple(_CORE_SIG.args)], len(compiled),\n"
+                      "print(list(core.overloads) == [tuple(CORE_SIG.args)], len(compiled),\n"
                       "      [n for n in compiled if 'raise_with_shape' in n])\n", timeout=900)
     one_core, n_compiled, error_paths = out.strip().split(" ", 2)
     assert one_core == "True" and int(n_compiled) > 10 and error_paths == "[]", out

@@ -9,7 +9,7 @@ function at a time in a process, and the biggest units take ~12 s each here: on 
 :func:`compile_aside` compiles the DOP853 core (``'core'``), and for a run whose modes will be written the
 modes kernels (``'modes'``), each in a process of its own while this one compiles the rest of its run
 (parameters, right-hand side, events); their first use waits for that process (:func:`wait_for_aside`) and loads
-what it cached (``pnrotor.ode.dop853._entry_point``, ``pnrotor.waveform.amplitudes.modes_in_frame``).  A cold
+what it cached (``pnrotor.ode.common.entry_point``, ``pnrotor.waveform.amplitudes.modes_in_frame``).  A cold
 ``pnrotor evolve --modes`` (30 + 10 precessing) took 26-32 s with the modes kernels compiled after the run, in
 this process (measured; the figures with them aside are in the README).
 """
@@ -31,7 +31,7 @@ _asides = {}
 """The processes compiling aside, by what they compile, while they may still be running."""
 
 
-def is_cold(kernel="dop853._dop853_core", package="ode"):
+def is_cold(kernel="dop853.core", package="ode"):
     """True if numba's cache has no compiled ``kernel`` (``module.function`` of the subpackage ``pnrotor.package``)
     for this installation yet; by default the DOP853 core, which every run needs (``evolve_many`` compiles
     its own loop around it, ``many._integrate_all`` of ``pn``)."""
@@ -56,10 +56,10 @@ def cache_folder(package="ode"):
 def compile_aside(what):
     """Start compiling ``what`` ('core' or 'modes', module docstring) into numba's cache in another process; it
     dies with this one.  Nothing is lost if it fails: the first use then compiles it here."""
-    from pnrotor.batch.backends import _die_with_parent
+    from pnrotor.processes import die_with_parent
 
     _asides[what] = subprocess.Popen([sys.executable, "-c", _ASIDE_CODE[what]], stdin=subprocess.DEVNULL,
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=_die_with_parent)
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=die_with_parent)
 
 
 def wait_for_aside(what):

@@ -10,9 +10,10 @@
 (a bad value, evolve's ``ValueError``, a dead worker) never stops the others (:func:`attempt`).
 """
 
-import os
 import sys
 from pathlib import Path
+
+from pnrotor.processes import die_with_parent
 
 SCHEDULER_TIMEOUT = "10s"
 """How long to wait for a Dask scheduler to answer."""
@@ -120,27 +121,11 @@ def _ignore_interrupts():
 
 def _preload():
     _ignore_interrupts()
-    _die_with_parent()
+    die_with_parent()
     import pnrotor.pn.evolve  # noqa: F401 - numba's kernels, loaded once per worker
     from pnrotor import threads
 
     threads.limit(1)   # the workers fill the cores: a run's modes are not split over threads in a worker
-
-
-def _die_with_parent():
-    """Make this worker die when its parent does (Linux: the kernel's parent-death signal; the parent is the
-    batch process, or with 'forkserver' the server, which exits with it), so a batch killed with kill -9
-    leaves no orphan workers blocked on their queue (issue 15: two of ~130 MB each, every time)."""
-    import ctypes
-    import signal
-
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):  # pragma: no cover - not Linux
-        return
-    if os.getppid() == 1:  # orphaned before the request: nobody would send the signal
-        os._exit(1)
 
 
 def results_serial(tasks):

@@ -12,16 +12,16 @@ Importing this module needs ``sxs``.
 
 import sxs
 
+from pnrotor.waveform.distance import scale
+
 __all__ = ["waveform_modes"]
 
 
 def waveform_modes(modes):
     """``sxs.WaveformModes`` of ``modes`` (module docstring)."""
-    from pnrotor.waveform.modes import _scale
-
     inertial = modes.in_frame("inertial")
     data = inertial.data.T
     if modes.distance_Mpc is not None:   # strain at a distance → r h / M
-        data = data / _scale(None, modes.distance_Mpc, modes.inputs["M_seconds"])
+        data = data / scale(None, modes.distance_Mpc, modes.inputs["M_seconds"])
     return sxs.WaveformModes(data, time=modes.t, time_axis=0, modes_axis=1, ell_min=2, ell_max=modes.ell_max,
                              spin_weight=-2)

@@ -23,10 +23,14 @@ Right-hand sides and hooks are numba functions compiled with the exported signat
 
 The driver loops take these functions by the addresses of their compiled code (signatures checked
 before), so they are compiled once per machine (numba cache) and reused for every right-hand side.
+
+Modules: :mod:`~pnrotor.ode.common` (what the solvers share, and the protocol a solver module follows),
+:mod:`~pnrotor.ode.events` (the event root finder), :mod:`~pnrotor.ode.result`, :mod:`~pnrotor.ode.tableau`, and
+one per solver, :mod:`~pnrotor.ode.dop853` and :mod:`~pnrotor.ode.bulirsch_stoer`, neither importing the other.
 """
 
-from .dop853 import (AFTER_STEP_SIG, EVENTS_SIG, RHS_SIG, by_address, dop853, no_after_step, no_events,
-                     select_initial_step)
+from .common import AFTER_STEP_SIG, EVENTS_SIG, RHS_SIG, by_address, no_after_step, no_events, select_initial_step
+from .dop853 import dop853
 from .result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                      STATUS_SUCCESS, DenseOutput, OdeResult)
 

@@ -1,9 +1,9 @@
 r"""Gragg–Bulirsch–Stoer extrapolation integrator in numba.
 
-This module owns the extrapolation stepper (Gragg's modified midpoint rule + Aitken–Neville
-polynomial extrapolation), its order and step-size control, the driver loop (one ``@njit`` function
-compiled for one explicit signature on its first use, cached across processes like the DOP853 core) and the
-Python entry point :func:`bulirsch_stoer`.
+This module owns, as the solver protocol of :mod:`pnrotor.ode.common` asks, the extrapolation stepper (Gragg's
+modified midpoint rule + Aitken–Neville polynomial extrapolation), its order and step-size control, the driver loop
+(:func:`core`, one ``@njit`` function compiled for one explicit signature ``CORE_SIG`` on its first use, cached
+across processes like the DOP853 core) and the Python entry point :func:`bulirsch_stoer`.
 
 Algorithms (Hairer, Nørsett & Wanner, *Solving Ordinary Differential Equations I*, 2nd ed., Springer
 1993, Sec. II.9, and Hairer's ODEX code; W. B. Gragg, SIAM J. Numer. Anal. 2, 384 (1965);
@@ -43,10 +43,10 @@ import math
 import numpy as np
 from numba import njit, types
 
-from .dop853 import (FV_H, FV_T, FV_TFAIL, IV_NACC, IV_NANREJ, IV_NFEV, IV_NMOD, IV_NOUT,
-                     IV_NREJ, IV_NSTEPS, IV_STATUS, OUT_FINAL, OUT_STEPS, OUT_TEVAL, _A1, _A2, _I1,
-                     _after_step_function, _all_finite, _append_row, _common_inputs, _entry_point, _f8,
-                     _function_addresses, _i8, _result, _rhs_function, _scaled, _trivial_result, select_initial_step)
+from .common import (A1, A2, F8, FV_H, FV_T, FV_TFAIL, I1, I8, IV_NACC, IV_NANREJ, IV_NFEV, IV_NMOD, IV_NOUT, IV_NREJ,
+                     IV_NSTEPS, IV_STATUS, OUT_FINAL, OUT_STEPS, OUT_TEVAL, after_step_function, all_finite, append_row,
+                     assemble_result, common_inputs, entry_point, function_addresses, rhs_function, scaled,
+                     select_initial_step, trivial_result)
 from .result import STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW, STATUS_SUCCESS
 
 K_MAX_DEFAULT = 9
@@ -77,22 +77,22 @@ def _gragg(rhs, t, y, f0, h_step, nsub, p, za, zb, ftmp):
     return zb
 
 
-_BS_SIG = types.Tuple((_A1, _A2, _I1, _A1))(
-    _I1,                         # functions: rhs, after_step (pnrotor.ode.dop853.FUNCTIONS_LAYOUT)
-    _f8, _A1, _f8, _A1,          # t0, y0, t_end, p
-    _A1, _A1,                    # atol, rtol
-    _f8, _f8, _i8,               # first_step (0: automatic), max_step, max_steps
-    _i8, _i8, _i8,               # out_mode, k_max (columns), k_init (initial target column, 0-based)
+CORE_SIG = types.Tuple((A1, A2, I1, A1))(
+    I1,                          # functions: rhs, after_step (pnrotor.ode.common.FUNCTIONS_LAYOUT)
+    F8, A1, F8, A1,              # t0, y0, t_end, p
+    A1, A1,                      # atol, rtol
+    F8, F8, I8,                  # first_step (0: automatic), max_step, max_steps
+    I8, I8, I8,                  # out_mode, k_max (columns), k_init (initial target column, 0-based)
 )
 
 
-@njit(cache=True)   # compiled for _BS_SIG by _entry_point when first needed, not at import (~9 s cold)
-def _bs_core(functions, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps, out_mode, kmax, k_init):
+@njit(cache=True)   # compiled for CORE_SIG by entry_point when first needed, not at import (~9 s cold)
+def core(functions, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_steps, out_mode, kmax, k_init):
     """The Bulirsch–Stoer driver loop, its right-hand side and hook given by address (the first two of
     ``FUNCTIONS_LAYOUT``).  Returns (t_out, y_out, ivals, fvals); the output buffers are over-allocated, their
     used length is ivals[IV_NOUT]."""
-    rhs = _rhs_function(functions[0], functions[1])
-    after_step = _after_step_function(functions[2], functions[3])
+    rhs = rhs_function(functions[0], functions[1])
+    after_step = after_step_function(functions[2], functions[3])
     n = y0.size
     direction = 1.0 if t_end > t0 else -1.0
     nseq = np.empty(kmax, dtype=np.int64)
@@ -133,12 +133,12 @@ def _bs_core(functions, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_
     y = y0.copy()
     t = t0
     if out_mode == OUT_STEPS:
-        t_out, y_out, n_out = _append_row(t_out, y_out, n_out, t, y)
+        t_out, y_out, n_out = append_row(t_out, y_out, n_out, t, y)
     rhs(t, y, p, f0)
     nfev += 1
     k_targ = min(max(k_init, 1), kmax - 2)
     h_abs = 0.0
-    if not _all_finite(f0):
+    if not all_finite(f0):
         status = STATUS_NONFINITE
         fvals[FV_TFAIL] = t
     elif first_step > 0.0:
@@ -184,7 +184,7 @@ def _bs_core(functions, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_
             for j in range(k_targ + 2):
                 z = _gragg(rhs, t, y, f0, h, nseq[j], p, za, zb, ftmp)
                 nfev += nseq[j] - 1
-                if not _all_finite(z):
+                if not all_finite(z):
                     nonfinite = True
                     break
                 # Aitken–Neville: tab[m] <- T_{j,m}, m = 0..j
@@ -200,7 +200,7 @@ def _bs_core(functions, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_
                 s = 0.0
                 for i in range(n):
                     sc = atol[i] + rtol[i] * max(abs(y[i]), abs(tab[j, i]))
-                    e = _scaled(tab[j, i] - tab[j - 1, i], sc)
+                    e = scaled(tab[j, i] - tab[j - 1, i], sc)
                     s += e * e
                 err = math.sqrt(s / n)
                 if not math.isfinite(err):
@@ -298,22 +298,22 @@ def _bs_core(functions, t0, y0, t_end, p, atol, rtol, first_step, max_step, max_
             y[i] = tab[j, i]
         if after_step(t, y, p):
             nmod += 1
-        if not _all_finite(y):
+        if not all_finite(y):
             status = STATUS_NONFINITE
             fvals[FV_TFAIL] = t
             break
         if direction * (t_end - t) > 0.0:
             rhs(t, y, p, f0)
             nfev += 1
-            if not _all_finite(f0):
+            if not all_finite(f0):
                 status = STATUS_NONFINITE
                 fvals[FV_TFAIL] = t
                 break
         if out_mode == OUT_STEPS:
-            t_out, y_out, n_out = _append_row(t_out, y_out, n_out, t, y)
+            t_out, y_out, n_out = append_row(t_out, y_out, n_out, t, y)
 
     if out_mode == OUT_FINAL:
-        t_out, y_out, n_out = _append_row(t_out, y_out, 0, t, y)
+        t_out, y_out, n_out = append_row(t_out, y_out, 0, t, y)
 
     ivals[IV_STATUS] = status
     ivals[IV_NFEV] = nfev
@@ -351,14 +351,14 @@ def bulirsch_stoer(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None,
         raise ValueError("dense output is not implemented for bulirsch_stoer (dense must be False); use dop853")
     if events is not None or n_events:
         raise ValueError("events are not implemented for bulirsch_stoer (events must be None); use dop853")
-    c = _common_inputs(rhs, t0, y0, t_end, atol, rtol, args, first_step, max_step, max_steps, t_eval, after_step)
+    c = common_inputs(rhs, t0, y0, t_end, atol, rtol, args, first_step, max_step, max_steps, t_eval, after_step)
     if c.mode == OUT_TEVAL:
         raise ValueError("t_eval arrays are not supported by bulirsch_stoer (no dense output); "
                          "use t_eval=None or 'final', or dop853")
     if isinstance(k_max, (bool, np.bool_)) or not isinstance(k_max, (int, np.integer)) or not 4 <= k_max <= 12:
         raise ValueError(f"k_max must be an integer in [4, 12], got {k_max!r}")
     if c.t_end == c.t0:
-        return _trivial_result(c.t0, c.y0, c.mode, c.t_eval, "Bulirsch-Stoer")
+        return trivial_result(c.t0, c.y0, c.mode, c.t_eval, "Bulirsch-Stoer")
 
     # initial target column from the tolerance (Hairer's ODEX: k = -log10(tol)·0.6 + 1.5 columns)
     ymag = max(float(np.max(np.abs(c.y0))), 1.0)
@@ -367,7 +367,7 @@ def bulirsch_stoer(rhs, t0, y0, t_end, atol, rtol=0.0, args=(), first_step=None,
     k_init = int(-math.log10(tol) * 0.6 + 1.5) - 1
     k_init = min(max(k_init, 1), int(k_max) - 2)
 
-    t_out, y_out, iv, fv = _entry_point(_bs_core, _BS_SIG)(
-        _function_addresses(c.rhs, c.after_step), c.t0, c.y0, c.t_end, c.p, c.atol, c.rtol, c.first_step, c.max_step,
+    t_out, y_out, iv, fv = entry_point(core, CORE_SIG)(
+        function_addresses(c.rhs, c.after_step), c.t0, c.y0, c.t_end, c.p, c.atol, c.rtol, c.first_step, c.max_step,
         c.max_steps, c.mode, int(k_max), k_init)
-    return _result(t_out, y_out, iv, fv, "Bulirsch-Stoer")
+    return assemble_result(t_out, y_out, iv, fv, "Bulirsch-Stoer")

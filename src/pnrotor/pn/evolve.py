@@ -46,7 +46,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..ode import EVENTS_SIG, RHS_SIG, by_address
-from ..ode.dop853 import OUT_FINAL, OUT_STEPS, _controller, _default_hook, _integrate
+from ..ode.common import OUT_FINAL, OUT_STEPS, controller, default_hook
+from ..ode.dop853 import run_core
 from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
 from . import initial as _ini
@@ -76,7 +77,7 @@ CONTROLLER = dict(safety=0.85, max_factor=4.0)
 """DOP853 step-size controller for the inspiral.  With Hairer's defaults (0.9, 6) the accelerating chirp
 makes every few steps a rejection (18–57 of 116–216 attempts in the LALSuite comparison cases); with
 (0.85, 4) there are none and the runs cost 10–35% fewer evaluations (benchmarks/bench_pn.py)."""
-_CONTROLLER = _controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
+_CONTROLLER = controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
 """(safety, min_factor, max_factor) as :func:`pnrotor.ode.dop853` would check them (min_factor its default)."""
 
 
@@ -331,12 +332,12 @@ def integrate_half(s, system, forward, t_eval, dense):
     """DOP853 from f_ref over the forward or backward :func:`half` → (OdeResult, termination name); ``t_eval``
     is None (every step) or 'final'.  What :func:`pnrotor.ode.dop853` would check is guaranteed by
     :func:`~pnrotor.pn.settings.settings` and :func:`build_system`, so its core is called directly
-    (``pnrotor.ode.dop853._integrate``)."""
+    (:func:`pnrotor.ode.dop853.run_core`)."""
     p, t_end, directions = half(s.v0, s.nu, s.v_min, system.p, forward)
-    res = _integrate(system.rhs, _default_hook("after_step"), system.events, 0.0, system.y0, t_end, p,
-                     *_tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
-                     _NO_T_EVAL, OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, _sys.N_EVENTS, directions,
-                     *_CONTROLLER)
+    res = run_core(system.rhs, default_hook("after_step"), system.events, 0.0, system.y0, t_end, p,
+                   *_tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
+                   _NO_T_EVAL, OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, _sys.N_EVENTS, directions,
+                   *_CONTROLLER)
     return res, termination(res.status, res.event_index, end_name(forward, s.f_max is not None), s.approximant)
 
 

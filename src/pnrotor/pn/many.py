@@ -45,10 +45,11 @@ import numpy as np
 from numba import njit
 
 from .. import numba_cache, threads
-from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
-                          STATUS_EVENT, _crossed, _default_hook, _dop853_core, _events_function, _function_addresses,
-                          _locate_root)
-from ..ode.result import contd8
+from ..ode.common import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
+                          default_hook, events_function, function_addresses)
+from ..ode.dop853 import core as dop853_core
+from ..ode.events import crossed, locate_root
+from ..ode.result import STATUS_EVENT, contd8
 from . import initial as _ini
 from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _ended_at, _tolerances, build_rows, end_name,
                      half, kmax_of, population_parts, termination)
@@ -115,7 +116,7 @@ def _integrate_all(lo, hi, functions, Y0, P, t_end, directions, atol, rtol, max_
                    min_factor, max_factor, mode, R0, ell0, c1, c2, rows, near_v, near_rows, t, v, Phi, chi1, chi2,
                    R, ell, counts, no_t, out_mode):
     """Each half k = lo … hi−1 of the group (state Y0[k], parameters P[k]) integrated by the DOP853 core with
-    ``functions`` (:data:`pnrotor.ode.dop853.FUNCTIONS_LAYOUT`) to its end; its final state into row rows[k] of the
+    ``functions`` (:data:`pnrotor.ode.common.FUNCTIONS_LAYOUT`) to its end; its final state into row rows[k] of the
     outputs (t, v, …, ℓ̂) and (status, event index, step attempts, evaluations) into
     counts[rows[k]]; the states at the nearer targets v = near_v[k, j] into the rows near_rows[k, j] (−1:
     none), by :func:`_nearer_targets` on the dense output, computed only for halves that have them.  ``no_t``
@@ -123,10 +124,10 @@ def _integrate_all(lo, hi, functions, Y0, P, t_end, directions, atol, rtol, max_
     called with the types of its one signature (written as a constant here, numba compiled a second core,
     ~7 s)."""
     n_events = directions.shape[1]
-    events = _events_function(functions[4], functions[5])
+    events = events_function(functions[4], functions[5])
     for k in range(lo, hi):
         want_dense = near_rows.shape[1] > 0 and near_rows[k, 0] >= 0
-        t_out, y_out, seg_t, seg_h, seg_c, iv, fv, _ = _dop853_core(
+        t_out, y_out, seg_t, seg_h, seg_c, iv, fv, _ = dop853_core(
             functions, 0.0, Y0[k], t_end[k], P[k], atol, rtol, 0.0, np.inf, max_steps, no_t,
             out_mode, want_dense, n_events, directions[k], safety, min_factor, max_factor)
         last = iv[IV_NOUT] - 1
@@ -155,7 +156,7 @@ def _nearer_targets(events, p_run, v_target, direction, seg_t, seg_h, seg_c, iv,
     ``direction``) would end with, from a run to a farther v with dense output: the first step across
     v_target, with the event values v − v_target at its ends (the start of the next step, or y + (y_new − y) =
     y_new for the last one, exact as |v| changes by far less than 2× in a step), the root of the same
-    :func:`~pnrotor.ode.dop853._locate_root` and the same ``contd8``.  Unless another event of that last
+    :func:`~pnrotor.ode.events.locate_root` and the same ``contd8``.  Unless another event of that last
     step comes strictly first, as the core decides, or v_target is never crossed: then the run's own end."""
     p = p_run.copy()
     p[P_VEND] = v_target
@@ -168,11 +169,11 @@ def _nearer_targets(events, p_run, v_target, direction, seg_t, seg_h, seg_c, iv,
         last = s + 1 == nseg
         g_a = rc[0, 0] - v_target
         g_b = (rc[0, 0] + rc[1, 0] if last else seg_c[s + 1, 0, 0]) - v_target
-        if not _crossed(g_a, g_b, direction):
+        if not crossed(g_a, g_b, direction):
             continue
         t_a, h = seg_t[s], seg_h[s]
         t_b = t_a + h if last else seg_t[s + 1]
-        root = _locate_root(events, p, EV_V_END, t_a, t_b, g_a, g_b, t_a, h, rc, yint, gtmp)
+        root = locate_root(events, p, EV_V_END, t_a, t_b, g_a, g_b, t_a, h, rc, yint, gtmp)
         if last and iv[IV_STATUS] == STATUS_EVENT and iv[IV_EVENT] != EV_V_END and (fv[FV_TEVENT] - root) * h < 0.0:
             break
         y = np.empty((1, n))
@@ -268,7 +269,7 @@ def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, dir
     longer to compile cold (measured: 4,000 binaries, six alternating pairs of processes; a first call with the core
     cached 30.4-31.8 s against 17.7-19.8 s), and an even split left one thread idle at the end, ~4% of the loop."""
     atol_a, rtol_a = _tolerances(Y0.shape[1], atol, rtol)
-    args = (_function_addresses(rhs, _default_hook("after_step"), events), Y0, P, t_end, directions,
+    args = (function_addresses(rhs, default_hook("after_step"), events), Y0, P, t_end, directions,
             atol_a, rtol_a, max_steps, *_CONTROLLER, mode, R0, ell, chi1, chi2, rows, near_v, near_r, out.t, out.v,
             out.Phi, out.chi1, out.chi2, out.R, out.ell_hat, counts, np.empty(0), OUT_FINAL)
     start = time.perf_counter()

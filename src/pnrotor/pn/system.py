@@ -84,7 +84,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..ode.dop853 import _events_function
+from ..ode.common import events_function
 from .energy import energy_derivative_series, energy_series
 from .flux import flux_series
 from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms, spin_orbit_precession,
@@ -528,7 +528,7 @@ _SCAN_FROM, _SCAN_STEP = 0.05, 0.045
 @njit(cache=True)
 def earlier_end(c_addr, jit_addr, y0, p):
     """The first v below v₀ = y0[0] where event 1, 2, 5 or 6 of the system's events function (its addresses, as
-    :data:`pnrotor.ode.dop853.FUNCTIONS_LAYOUT` gives them) at the state y0 with that v reaches zero, or 0.0: a v₀
+    :data:`pnrotor.ode.common.FUNCTIONS_LAYOUT` gives them) at the state y0 with that v reaches zero, or 0.0: a v₀
     beyond it lies past the end of the inspiral even where the events are positive again at v₀ (a review found
     f_ref = 1000 Hz accepted for an aligned 30 + 10 M☉ binary whose inspiral ends at 455 Hz, while 600 Hz was
     refused).  Found on a geometric grid from 0.05 to v₀ (:data:`_SCAN_STEP`: a band of failing events narrower
@@ -538,7 +538,7 @@ def earlier_end(c_addr, jit_addr, y0, p):
     v0 = y0[Y_V]
     if not v0 > _SCAN_FROM:
         return 0.0
-    g = _events_function(c_addr, jit_addr)
+    g = events_function(c_addr, jit_addr)
     y = y0.copy()
     values = np.empty(N_EVENTS)
     points = math.ceil(math.log(v0 / _SCAN_FROM) / _SCAN_STEP)

@@ -25,7 +25,6 @@ Checked: against LALSuite's SpinTaylorT4 modes (ℓ ≤ 4, 1.5PN; tests/test_wav
 quadrupole formula (tests/test_waveform_modes.py).
 """
 
-import functools
 import math
 import sys
 from dataclasses import dataclass, field, replace
@@ -38,6 +37,7 @@ from pnrotor.pn.evolve import Evolution
 from pnrotor.pn.initial import _integer, _real
 from pnrotor.waveform import polarizations as _pol
 from pnrotor.waveform.amplitudes import modes_in_frame
+from pnrotor.waveform.distance import scale as _scale
 from pnrotor.waveform.layout import ell_m as _ell_m
 from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.waveform.wigner import rotate_modes
@@ -65,27 +65,6 @@ def _angle(value, name):
     if not (_real(value) and math.isfinite(value)):
         raise ValueError(f"{name} must be a finite angle in radians (a number, or an astropy angle); got {value!r}")
     return float(value)
-
-
-def _scale(from_Mpc, to_Mpc, M_seconds):
-    """Factor taking modes at distance ``from_Mpc`` (None: r h / M) to strain at ``to_Mpc``; a ValueError naming
-    ``distance`` where it is not a normal float64 (inf, or 0 or subnormal: the modes would be lost)."""
-    metres_per_Mpc, c = _constants()
-    source = M_seconds * c if from_Mpc is None else from_Mpc * metres_per_Mpc
-    scale = source / (to_Mpc * metres_per_Mpc)
-    if not sys.float_info.min <= scale < math.inf:
-        raise ValueError(f"distance = {to_Mpc!r} Mpc is out of range: it scales these modes by {scale:.3g}, "
-                         f"beyond float64's normal numbers")
-    return scale
-
-
-@functools.cache
-def _constants():
-    """(metres in a megaparsec, c in m/s) from astropy, once (a unit conversion costs ~10 µs)."""
-    from astropy import constants as const
-    from astropy import units as u
-
-    return u.Mpc.to(u.m), const.c.value
 
 
 @dataclass(eq=False)
