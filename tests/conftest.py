@@ -1,9 +1,15 @@
 """Hypothesis profiles: ``default`` draws the same examples on every run (derandomized), so the suite
 and CI pass or fail reproducibly; ``explore`` draws new random examples each run, to hunt for new
 failures: ``python3 -m pytest --hypothesis-profile=explore``.  (A random run found the degenerate binary
-of tests/test_integrate.py::test_generator_on_the_half_pi_sphere_converges.)"""
+of tests/test_integrate.py::test_generator_on_the_half_pi_sphere_converges.)
+
+The suite runs in a random order (pytest-randomly, in the test extra: ``--randomly-seed=N`` repeats an order,
+``-p no:randomly`` runs the files in order), so every test leaves the process as it found it (`_process_state`);
+and it passes where it is started with SIGINT ignored (a background job, a supervisor): a test that needs
+Python's Ctrl-C installs it (`default_sigint`), in a child process too."""
 
 import os
+import signal
 import subprocess
 import sys
 
@@ -35,3 +41,26 @@ def cold_python(tmp_path):
         assert done.returncode == 0, done.stderr[-3000:]
         return done.stdout
     return run
+
+
+@pytest.fixture(autouse=True)
+def _process_state():
+    """After each test: the signal handlers and this thread's signal mask as before it, and no idle worker thread
+    of `pnrotor.threads` (the next test starts those it needs, with its own thread count)."""
+    handlers = {signum: signal.getsignal(signum) for signum in signal.valid_signals()}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    yield
+    for signum, handler in handlers.items():
+        if handler is not None and signal.getsignal(signum) is not handler:
+            signal.signal(signum, handler)
+    signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+    threads = sys.modules.get("pnrotor.threads")
+    if threads is not None:
+        threads.stop_idle_workers()
+
+
+@pytest.fixture
+def default_sigint():
+    """Python's own SIGINT handler (Ctrl-C raises KeyboardInterrupt) during the test, whatever this process started
+    with; `_process_state` puts the one before back."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)

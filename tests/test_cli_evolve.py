@@ -13,6 +13,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+from helpers import default_signals
 from test_hdf5 import assert_identical
 
 import pnrotor
@@ -708,7 +709,7 @@ def test_sigterm_and_sighup_stop_a_command_like_ctrl_c(signame, in_tmp):
     import signal
 
     process = subprocess.Popen([sys.executable, "-c", SLOW_RUN, "evolve", *FAST, "-o", "w.h5"],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
     try:
         assert process.stdout.readline() == "computing\n"
         process.send_signal(getattr(signal, signame))

@@ -11,6 +11,7 @@ import textwrap
 
 import h5py
 import pytest
+from helpers import default_signals
 
 from pnrotor import batch, hdf5, signals
 from pnrotor.cli import main
@@ -110,10 +111,10 @@ def test_a_batch_leaves_an_ignored_ctrl_c_ignored(tmp_path, monkeypatch, disposi
 
 
 def _ignore(*names):
-    """A preexec_fn: the child starts with SIGINT at its default and these signals ignored (as nohup or a shell's
-    ``cmd &`` start it), whatever this process's are."""
+    """A preexec_fn: the child starts with these signals ignored (as nohup or a shell's ``cmd &`` start it), the
+    others at their defaults, whatever this process's are."""
     def preexec():
-        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        default_signals()
         for name in names:
             signal.signal(getattr(signal, name), signal.SIG_IGN)
     return preexec
