@@ -22,14 +22,16 @@ one coefficient changed to LAL's value, T1 agrees like T4 — shown below.
 
 import numpy as np
 import pytest
+from helpers import needs, reference
+from pn_cases import CASES
 
-lal = pytest.importorskip("lal")
-ls = pytest.importorskip("lalsimulation")
+from pnrotor.pn import evolve, lalsuite_orders
 
-from pn_cases import CASES  # noqa: E402
+lal, ls = reference("lal"), reference("lalsimulation")
+if ls is not None:
+    from pnrotor.interop.lal import spintaylor_orbit, spintaylor_series
 
-from pnrotor.interop.lal import spintaylor_orbit, spintaylor_series  # noqa: E402
-from pnrotor.pn import evolve, lalsuite_orders  # noqa: E402
+pytestmark = needs("lal", "lalsimulation")
 
 DT = 1.0 / 4096
 

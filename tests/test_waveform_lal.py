@@ -19,15 +19,17 @@ import dataclasses
 
 import numpy as np
 import pytest
+from helpers import needs, reference
+from pn_cases import CASES as ALL_CASES
 
-lal = pytest.importorskip("lal")
-ls = pytest.importorskip("lalsimulation")
+from pnrotor.pn import evolve, lalsuite_orders
+from pnrotor.waveform.modes import modes
 
-from pn_cases import CASES as ALL_CASES  # noqa: E402
+lal, ls = reference("lal"), reference("lalsimulation")
+if ls is not None:
+    from pnrotor.interop.lal import polarization_series, sph_harm_time_series, spintaylor_series
 
-from pnrotor.interop.lal import polarization_series, sph_harm_time_series, spintaylor_series  # noqa: E402
-from pnrotor.pn import evolve, lalsuite_orders  # noqa: E402
-from pnrotor.waveform.modes import modes  # noqa: E402
+pytestmark = needs("lal", "lalsimulation")
 
 DT = 1.0 / 4096
 DISTANCE_MPC = 100.0
