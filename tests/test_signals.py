@@ -82,31 +82,20 @@ def test_hdf5_write_leaves_an_ignored_signal_ignored(tmp_path, monkeypatch, disp
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
 
 
-@pytest.mark.parametrize("jobs", [1, 2])
-def test_a_batch_leaves_an_ignored_ctrl_c_ignored(tmp_path, monkeypatch, dispositions, jobs):
-    """A background batch (``cmd &``: SIGINT ignored) had its SIGINT turned back on, here and, while they wrote, in
-    its workers, which take no signal at all (the batch process stops them)."""
-    seen = _handlers_while_writing(monkeypatch)   # with jobs=2, in the workers: their handlers sent back below
-    if jobs == 2:
-        if not sys.platform.startswith("linux"):
-            pytest.skip("the patches reach the workers by fork")
-        monkeypatch.setattr(batch.backends, "start_method", lambda: "fork")
-        real = batch.backends.store
+def test_a_batch_leaves_an_ignored_ctrl_c_ignored(tmp_path, monkeypatch, dispositions):
+    """A background batch (``cmd &``: SIGINT ignored) had its SIGINT turned back on while it ran and wrote (its
+    workers: `test_a_nohup_or_background_batch_survives_the_signal_it_ignores`)."""
+    seen, evolve_row = _handlers_while_writing(monkeypatch), batch.backends.evolve_row
 
-        def store(result, folder, index, storage):
-            stored = real(result, folder, index, storage)
-            stored.brief["handlers"] = seen[-1]
-            return stored
+    def row(params):
+        seen.append({s: signal.getsignal(s) for s in signals.STOPPING})
+        return evolve_row(params)
 
-        monkeypatch.setattr(batch.backends, "store", store)
+    monkeypatch.setattr(batch.backends, "evolve_row", row)
     dispositions(SIGINT=signal.SIG_IGN, SIGTERM=signal.SIG_DFL, SIGHUP=signal.SIG_DFL)
-    outcome = batch.run(_table(tmp_path / "b.csv", 4), tmp_path / "out.h5", jobs=jobs)
+    outcome = batch.run(_table(tmp_path / "b.csv", 4), tmp_path / "out.h5", jobs=1)
     assert outcome.written == 4 and not outcome.failed
-    if jobs == 2:
-        seen = [brief["handlers"] for brief in outcome.briefs.values()]
-        assert all(h[signal.SIGINT] is h[signal.SIGHUP] is signal.SIG_IGN and h[signal.SIGTERM] is signal.SIG_DFL
-                   for h in seen), seen
-    assert len(seen) >= 4 and all(h[signal.SIGINT] is signal.SIG_IGN for h in seen)
+    assert len(seen) >= 8 and all(h[signal.SIGINT] is signal.SIG_IGN for h in seen)
     assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
 
 
