@@ -7,7 +7,6 @@ import os
 import signal
 import subprocess
 import sys
-import textwrap
 
 import h5py
 import pytest
@@ -27,7 +26,7 @@ def _table(path, rows):
 
 
 def _handlers_while_writing(monkeypatch):
-    """The handlers of SIGINT, SIGTERM and SIGHUP each time HDF5 writes a dataset (here or in a forked worker)."""
+    """The handlers of SIGINT, SIGTERM and SIGHUP each time HDF5 writes a dataset."""
     seen, create = [], h5py.Group.create_dataset
 
     def create_dataset(self, name, *args, **kwargs):
@@ -38,21 +37,13 @@ def _handlers_while_writing(monkeypatch):
     return seen
 
 
-@pytest.fixture
-def dispositions():
-    """set(**{name: handler}): set those signals' handlers for the test; each is put back after it."""
-    before = {s: signal.getsignal(s) for s in signals.STOPPING}
-
-    def set_(**handlers):
-        for name, handler in handlers.items():
-            signal.signal(getattr(signal, name), handler)
-
-    yield set_
-    for s, handler in before.items():
-        signal.signal(s, handler)
+def dispositions(**handlers):
+    """Set these signals' handlers (name=handler) for the test (conftest's `_process_state` puts them back)."""
+    for name, handler in handlers.items():
+        signal.signal(getattr(signal, name), handler)
 
 
-def test_only_signals_at_their_default_disposition_are_taken(dispositions):
+def test_only_signals_at_their_default_disposition_are_taken():
     """Ignored, or the program's own: left alone; SIG_DFL and Python's own SIGINT handler: taken, and put back."""
     def mine(signum, frame):
         pass
@@ -69,7 +60,7 @@ def test_only_signals_at_their_default_disposition_are_taken(dispositions):
     assert signals.free(signal.SIGINT) and not signals.free(signal.SIGTERM)   # Python's default is SIGINT's only
 
 
-def test_hdf5_write_leaves_an_ignored_signal_ignored(tmp_path, monkeypatch, dispositions):
+def test_hdf5_write_leaves_an_ignored_signal_ignored(tmp_path, monkeypatch):
     """A nohup'ed script calling hdf5.write died of SIGHUP (a KeyboardInterrupt traceback): pnrotor's handler
     replaced the ignored disposition while the file was written."""
     from test_hdf5 import frame_history
@@ -82,7 +73,7 @@ def test_hdf5_write_leaves_an_ignored_signal_ignored(tmp_path, monkeypatch, disp
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
 
 
-def test_a_batch_leaves_an_ignored_ctrl_c_ignored(tmp_path, monkeypatch, dispositions):
+def test_a_batch_leaves_an_ignored_ctrl_c_ignored(tmp_path, monkeypatch):
     """A background batch (``cmd &``: SIGINT ignored) had its SIGINT turned back on while it ran and wrote (its
     workers: `test_a_nohup_or_background_batch_survives_the_signal_it_ignores`)."""
     seen, evolve_row = _handlers_while_writing(monkeypatch), batch.backends.evolve_row
@@ -169,7 +160,7 @@ def test_ctrl_c_of_a_jobs_batch_prints_one_line_with_the_resume_hint(tmp_path):
                    "--resume (resume=True)\n")
 
 
-def test_the_command_line_leaves_an_ignored_sighup_ignored(tmp_path, monkeypatch, dispositions):
+def test_the_command_line_leaves_an_ignored_sighup_ignored(tmp_path, monkeypatch):
     """SIGTERM and SIGHUP stop a command like Ctrl-C, unless set to be ignored (nohup) or the program's own."""
     def mine(signum, frame):
         pass
