@@ -13,6 +13,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+from helpers import default_signals
 from test_hdf5 import assert_identical
 
 import pnrotor
@@ -615,6 +616,8 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     they are missing; while the core compiles aside, this process compiles two of its callees."""
     from pnrotor import numba_cache
     from pnrotor.cli import evolve as cli_evolve
+    from pnrotor.pn import many
+    from pnrotor.waveform import amplitudes
     dop853 = importlib.import_module("pnrotor.ode.dop853")   # the module (pnrotor.ode.dop853 is also its function)
     started, here = [], []
     monkeypatch.setattr(numba_cache, "compile_aside", started.append)
@@ -624,7 +627,7 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     assert capsys.readouterr().err == ("pnrotor: compiling its numba kernels for this machine, once (~10-25 s); "
                                        "later runs load them in ~1-2 s\n")
     assert started == ["core"] and here == ["core parts"]
-    core = Path(numba_cache.cache_folder()) / "dop853.core-262.py311.nbi"
+    core = Path(numba_cache.cache_folder()) / _index_file(dop853.core)
     assert core.parent.parent == in_tmp / "empty-cache"
     core.parent.mkdir(parents=True)
     core.touch()
@@ -632,7 +635,7 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     assert capsys.readouterr().err == "" and started == ["core"]
     cli_evolve._warn_if_cold(modes=True)
     assert "(~20-35 s)" in capsys.readouterr().err and started == ["core", "modes"] and here == ["core parts"]
-    kernels = Path(numba_cache.cache_folder("waveform")) / "amplitudes._sum-215.py311.nbi"
+    kernels = Path(numba_cache.cache_folder("waveform")) / _index_file(amplitudes._sum)
     assert kernels.parent.parent == in_tmp / "empty-cache"
     kernels.parent.mkdir(parents=True)
     kernels.touch()
@@ -642,7 +645,7 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     # nothing compiled aside (the core is cached)
     cli_evolve._warn_if_cold(population=True)
     assert capsys.readouterr().err.startswith("pnrotor: compiling its numba kernels") and started == ["core", "modes"]
-    loop = Path(numba_cache.cache_folder("pn")) / "many._integrate_all-101.py311.nbi"
+    loop = Path(numba_cache.cache_folder("pn")) / _index_file(many._integrate_all)
     assert loop.parent.parent == in_tmp / "empty-cache"
     loop.parent.mkdir(parents=True)
     loop.touch()
@@ -654,7 +657,7 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
                                                    ("modes", "amplitudes._sum", "waveform")])
 def test_what_is_compiled_aside_is_what_the_cache_then_holds(tmp_path, monkeypatch, what, kernel, package):
     """compile_aside's process fills the cache it is given (here a fresh one: a real compilation, ~10-15 s)
-    and exits cleanly; waiting for it twice is harmless."""
+    and exits cleanly, with the index file `_index_file` names; waiting for it twice is harmless."""
     from pnrotor import numba_cache
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     assert numba_cache.is_cold(kernel, package)
@@ -664,6 +667,17 @@ def test_what_is_compiled_aside_is_what_the_cache_then_holds(tmp_path, monkeypat
     numba_cache.wait_for_aside(what)
     assert process.returncode == 0 and what not in numba_cache._asides
     assert not numba_cache.is_cold(kernel, package)
+    module, name = kernel.split(".")
+    index = _index_file(getattr(importlib.import_module(f"pnrotor.{package}.{module}"), name))
+    assert (Path(numba_cache.cache_folder(package)) / index).is_file()
+
+
+def _index_file(kernel):
+    """The name of numba's cache index of the njit function ``kernel``: MODULE.QUALNAME-LINE.pyXY.nbi, LINE that
+    of its first line (its decorator's), as numba's _CacheImpl names it."""
+    function = kernel.py_func
+    return (f"{function.__module__.rpartition('.')[2]}.{function.__qualname__}-{function.__code__.co_firstlineno}"
+            f".py{sys.version_info[0]}{sys.version_info[1]}.nbi")
 
 
 SHARED = """import sys
@@ -708,7 +722,7 @@ def test_sigterm_and_sighup_stop_a_command_like_ctrl_c(signame, in_tmp):
     import signal
 
     process = subprocess.Popen([sys.executable, "-c", SLOW_RUN, "evolve", *FAST, "-o", "w.h5"],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
     try:
         assert process.stdout.readline() == "computing\n"
         process.send_signal(getattr(signal, signame))

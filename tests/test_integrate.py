@@ -38,6 +38,20 @@ def test_converges_to_the_analytic_rotor_as_atol_falls(formulation, method):
     assert errors[2] < 1e-9, errors
 
 
+ERROR_PER_ATOL = {
+    # (formulation, method): twice the largest max δ / atol, rounded up to ten, of the strategy below over 2,200
+    # random binaries, each at both atols (medians 3-15).  With --hypothesis-profile=explore, hypothesis finds
+    # generator binaries near the half-π sphere beyond these (up to 2,637 atol in 3,000 examples), as beyond the
+    # former 300 (the test below); the other formulations stayed below 74 there.
+    ("generator", "Bulirsch-Stoer"): 300, ("generator", "DOP853"): 150,
+    ("generator-noreset", "Bulirsch-Stoer"): 270, ("generator-noreset", "DOP853"): 70,
+    ("rotor", "Bulirsch-Stoer"): 170, ("rotor", "DOP853"): 70,
+    ("vectors-damped", "Bulirsch-Stoer"): 210, ("vectors-damped", "DOP853"): 100,
+    ("vectors2", "Bulirsch-Stoer"): 100, ("vectors2", "DOP853"): 70,
+    ("vectors3", "Bulirsch-Stoer"): 140, ("vectors3", "DOP853"): 80,
+}
+
+
 @settings(max_examples=30, deadline=None)
 @given(
     Omega_orb=st.floats(1e-3, 2e-2), Omega_prec=st.floats(-2e-3, 2e-3), alpha=st.floats(-3.0, 3.0),
@@ -50,14 +64,14 @@ def test_random_binaries_are_integrated_to_the_tolerance_level(Omega_orb, Omega_
     b = PrecessingNutatingBinary(Omega_orb=Omega_orb, Omega_prec=Omega_prec, alpha=alpha,
                                  alpha_dot=alpha_dot, nu=nu, R0=R0)
     h = integrate_angular_velocity(b, (0, 5e3), b.rotor(0.0), formulation, method, atol=atol)
-    assert max_error(b, h) < 300 * atol  # measured: at most ~70 atol over 40 random binaries
+    assert max_error(b, h) < ERROR_PER_ATOL[formulation, method] * atol
 
 
 def test_generator_on_the_half_pi_sphere_converges():
     """A binary without precession, nutation or opening angle (pure rotation about a fixed axis) from
     R₀ = (0, ŷ): the exact generator stays on |r| = π/2 with ω ⊥ r.  There the generator's error per atol
     is ~100× the rotor's (measured max δ: generator 1.41e-5 / 4.9e-9, without reset 3.2e-6 / 2.1e-9, rotor
-    1.4e-7 / 1.4e-10 at atol 1e-8 / 1e-11), beyond the 300 atol of the random test above (where
+    1.4e-7 / 1.4e-10 at atol 1e-8 / 1e-11), beyond the bounds of the random test above (where
     hypothesis found it), but it converges like the others as atol falls."""
     b = PrecessingNutatingBinary(Omega_orb=0.015625, Omega_prec=0.0, alpha=0.0, alpha_dot=0.0, nu=0.0,
                                  R0=[0.0, 0.0, 1.0, 0.0])

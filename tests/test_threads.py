@@ -12,6 +12,7 @@ import time
 import numpy as np
 import pytest
 from hypothesis import given, settings
+from helpers import default_signals
 from hypothesis import strategies as st
 
 from pnrotor import threads
@@ -185,7 +186,7 @@ def test_batch_workers_take_one_thread_each():
         assert pool.submit(threads.thread_count).result(timeout=120) == 1
 
 
-def test_a_ctrl_c_while_waiting_is_raised_after_every_part():
+def test_a_ctrl_c_while_waiting_is_raised_after_every_part(default_sigint):
     done = []
     claimed, sent = threading.Event(), threading.Event()
 
@@ -365,7 +366,8 @@ def test_ctrl_c_at_any_moment_leaves_no_part_running_and_the_counts_right():
             late += len(finished) > seen
         print("interrupted", interrupted, "late", late, "busy", threads._busy, flush=True)
     """)
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                          preexec_fn=default_signals)
     assert done.returncode == 0, done.stderr
     assert " late 0 busy 0" in done.stdout and "interrupted 0 " not in done.stdout, done.stdout
 
@@ -398,7 +400,7 @@ def test_a_signal_handlers_exception_while_waiting_is_raised_after_every_part():
     assert done == [1] and stops == [0] and threads._busy == 0
 
 
-def test_a_ctrl_c_stops_kernels_that_take_blocks():
+def test_a_ctrl_c_stops_kernels_that_take_blocks(default_sigint):
     """With Python's own SIGINT handler (it raises KeyboardInterrupt once the call ends), a held Ctrl-C calls ``stop``
     at once: kernels that take their work in blocks (evolve_many's loop) stop within a block, not after the rest."""
     blocks, stopped = iter(range(200)), []

@@ -8,32 +8,55 @@ formulas of Arun et al. 2009 (arXiv:0810.5336, App. B).  pnrotor: the same orbit
 amplitude_order=1.5)``: co-orbital amplitudes rotated by the evolved rotor through Wigner matrices, an
 independent route to the same modes.
 
-Goal (issue 13): every mode within 1e-4 of max|h₂₂| over v ≤ 0.4.  Measured: ≤ 5e-7 for every mode of
-nonspinning binaries and for ℓ = 2, 4 of all; the ℓ = 3 modes of spinning binaries differ by up to 1.1e-2
-because ``XLALSimInspiralSpinPNMode3m`` takes S1 + S2 where its formula (Arun et al. 2009, with
+Goal (issue 13): every mode within 1e-4 of max|h₂₂| over v ≤ 0.4.  Measured (lalsuite 7.26.16, per case and
+ℓ in `MEASURED`, each bounded at `FACTOR` times it, issue 37): ≤ 4.7e-7 for every mode of nonspinning and
+aligned binaries; for precessing ones (2, ±2) differ by 4.7e-6 to 1.6e-5 (already with Newtonian amplitudes,
+8.3e-6 for q3-precessing, largest mid-inspiral, while the orbit agrees to 1e-8 rad: LALSuite's mode
+construction), the others of ℓ = 2 and 4 by ≤ 3.8e-7.  The ℓ = 3 modes of spinning binaries differ by up to
+1.1e-2 because ``XLALSimInspiralSpinPNMode3m`` takes S1 + S2 where its formula (Arun et al. 2009, with
 χ_s = (χ₁ + χ₂)/2, as its own ℓ = 2 function computes it) wants the average: fed half the spins, LALSuite's
-ℓ = 3 modes agree with ours to ≤ 1.2e-6 (test below).
+ℓ = 3 modes agree with ours to ≤ 9.6e-7 (test below).
 """
 
 import dataclasses
 
 import numpy as np
 import pytest
+from helpers import needs, reference
+from pn_cases import CASES as ALL_CASES
 
-lal = pytest.importorskip("lal")
-ls = pytest.importorskip("lalsimulation")
+from pnrotor.pn import evolve, lalsuite_orders
+from pnrotor.waveform.modes import modes
 
-from pn_cases import CASES as ALL_CASES  # noqa: E402
+lal, ls = reference("lal"), reference("lalsimulation")
+if ls is not None:
+    from pnrotor.interop.lal import polarization_series, sph_harm_time_series, spintaylor_series
 
-from pnrotor.interop.lal import polarization_series, sph_harm_time_series, spintaylor_series  # noqa: E402
-from pnrotor.pn import evolve, lalsuite_orders  # noqa: E402
-from pnrotor.waveform.modes import modes  # noqa: E402
+pytestmark = needs("lal", "lalsimulation")
 
 DT = 1.0 / 4096
 DISTANCE_MPC = 100.0
 
 CASES = {name: ALL_CASES[name] for name in ("equal-nonspinning", "q3-nonspinning", "q3-aligned", "q3-precessing",
                                             "q10-precessing", "near-extremal-precessing", "BNS-precessing")}
+
+MEASURED = {
+    # case: {ℓ: max over its modes of |h_ours − h_LAL| / max|h₂₂| (v ≤ 0.4)}, rounded up to two digits; ℓ = 3 of
+    # spinning binaries: LALSuite's factor 2 (the second test)
+    "equal-nonspinning": {2: 4.7e-7, 3: 4.1e-9, 4: 2.2e-8},
+    "q3-nonspinning": {2: 2.5e-7, 3: 2.7e-8, 4: 2.3e-8},
+    "q3-aligned": {2: 2.9e-7, 4: 2.8e-8},
+    "q3-precessing": {2: 7.8e-6, 4: 2.9e-7},
+    "q10-precessing": {2: 4.8e-6, 4: 3.8e-7},
+    "near-extremal-precessing": {2: 6.5e-6, 4: 2.4e-7},
+    "BNS-precessing": {2: 1.6e-5, 4: 1.4e-7},
+}
+FACTOR = 4
+"""Each ℓ of each case is bounded at FACTOR times its `MEASURED` value.  A change of 0.01% in the 3.5PN flux
+coefficient moves the modes by 1.2e-4 to 1.0e-3 of max|h₂₂| (24 times the measurement or more), one of 0.1% in
+the 1.5PN spin-orbit terms of H₂₂ by 1.3e-5 to 3.7e-5 where the spins are not small, which fails q3-aligned,
+q10-precessing and near-extremal-precessing; a bound of 1e-4 let the latter pass everywhere (and the former
+only just failed it)."""
 
 
 def lal_modes(m1, m2, chi1, chi2, f_min, amplitude_order2=3):
@@ -65,9 +88,9 @@ def test_modes_match_lal_spintaylor_t4(case):
     diff = differences(case)
     assert set(diff) == {(ell, m) for ell in range(2, 5) for m in range(-ell, ell + 1)}
     spinning = "nonspinning" not in case
-    checked = {lm: d for lm, d in diff.items() if not (spinning and lm[0] == 3)}
-    worst = max(checked, key=checked.get)
-    assert checked[worst] < 1e-4, (worst, checked[worst])
+    for ell, measured in MEASURED[case].items():
+        worst = max(d for lm, d in diff.items() if lm[0] == ell)
+        assert worst < FACTOR * measured, (ell, worst)
     if spinning:   # LALSuite's ℓ = 3 spin terms, twice too large: the next test
         assert max(diff[(3, m)] for m in range(-3, 4)) > 1e-4
 
@@ -78,8 +101,9 @@ def _series(data, like):
     return s
 
 
-@pytest.mark.parametrize("case", ["q3-aligned", "q3-precessing", "near-extremal-precessing"])
-def test_lal_l3_spin_terms_take_the_sum_of_the_spins_for_their_average(case):
+@pytest.mark.parametrize("case, measured", [("q3-aligned", 3.1e-8), ("q3-precessing", 9.6e-7),
+                                            ("near-extremal-precessing", 8.1e-7)])
+def test_lal_l3_spin_terms_take_the_sum_of_the_spins_for_their_average(case, measured):
     """LALSuite's own ℓ = 3 formula on its own orbit, with S₁, S₂ halved: then it agrees with our ℓ = 3 modes
     (through their spin terms, which the PN flux confirms); with the spins as ChooseTDModes passes them
     it does not."""
@@ -87,7 +111,7 @@ def test_lal_l3_spin_terms_take_the_sum_of_the_spins_for_their_average(case):
     V, Phi, *vectors = spintaylor_series(m1, m2, c1, c2, f, "T4", DT)
     spins, frame = vectors[:6], vectors[6:]
     r = DISTANCE_MPC * 1e6 * lal.PC_SI
-    for factor, bound in ((0.5, 1e-5), (1.0, None)):
+    for factor, bound in ((0.5, FACTOR * measured), (1.0, None)):
         scaled = [_series(factor * s.data.data, V) for s in spins]
         _, node = ls.SimInspiralSpinPNMode3m(V, Phi, *frame, *scaled, m1 * lal.MSUN_SI, m2 * lal.MSUN_SI, r, 3)
         theirs = {}

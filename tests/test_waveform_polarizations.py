@@ -3,16 +3,18 @@ quadrupole formula."""
 
 import numpy as np
 import pytest
+from helpers import needs, reference
 
 from pnrotor.waveform.polarizations import polarizations, swsh
 
-lal = pytest.importorskip("lal")
-ls = pytest.importorskip("lalsimulation")
+lal, ls = reference("lal"), reference("lalsimulation")
+needs_lal = needs("lal", "lalsimulation")
 
 rng = np.random.default_rng(7)
 ANGLES = [(0.0, 0.3), (np.pi, -1.2), (1e-9, 2.0), (np.pi - 1e-9, 0.1), (0.7, 0.0), (2.2, 4.0), (1.5707963, -0.4)]
 
 
+@needs_lal
 def test_swsh_equals_lal_for_spin_minus_two():
     worst = 0.0
     for ell in range(2, 9):
@@ -39,6 +41,7 @@ def test_swsh_rejects_bad_indices():
         swsh(-2, 2, 3, 0.1, 0.2)
 
 
+@needs_lal
 def test_polarizations_equal_lal_sum_over_modes():
     """LAL's own h₊, h× from a set of its modes (SpinTaylorT4, ℓ ≤ 4, a precessing binary: all m present)."""
     node = ls.SimInspiralChooseTDModes(0.0, 1.0 / 4096, 30 * lal.MSUN_SI, 10 * lal.MSUN_SI, 0.5, 0.1, 0.3, 0.0, 0.4,
@@ -58,6 +61,7 @@ def test_polarizations_equal_lal_sum_over_modes():
         assert np.max(np.abs(hc - hc_ref.data.data)) < 1e-13 * scale
 
 
+@needs_lal
 def test_polarization_angle_is_lals():
     """A detector's strain from the polarizations at ψ through LAL's antenna patterns at 0 is the strain from
     those at 0 through LAL's patterns at ψ (``XLALComputeDetAMResponse``)."""

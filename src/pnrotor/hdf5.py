@@ -62,7 +62,7 @@ from typing import NamedTuple
 import h5py
 import numpy as np
 
-from pnrotor import __version__
+from pnrotor import __version__, signals
 
 SCHEMA_VERSION = 1
 """Integer version of the layout below; `read` refuses files with a newer one."""
@@ -666,17 +666,14 @@ class _Interrupts:
     """While a file is written (in the main thread): SIGINT, SIGTERM and SIGHUP raise KeyboardInterrupt at
     once, so the temporary file is removed (SIGTERM's and SIGHUP's default would kill the process and leave
     it), and are remembered: one that Python swallowed because it arrived inside h5py's cleanup callbacks
-    ("Exception ignored ... KeyboardInterrupt") is raised again by `check` before the file is published."""
-
-    SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+    ("Exception ignored ... KeyboardInterrupt") is raised again by `check` before the file is published.  A
+    signal set to be ignored, or that the program handles, is left as it is (`pnrotor.signals`)."""
 
     def __init__(self):
         self.seen, self.previous = None, {}
 
     def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            for signum in self.SIGNALS:
-                self.previous[signum] = signal.signal(signum, self._handle)
+        self.previous = signals.take(self._handle)
         return self
 
     def _handle(self, signum, frame):
@@ -688,8 +685,7 @@ class _Interrupts:
             raise KeyboardInterrupt
 
     def __exit__(self, *exc):
-        for signum, handler in self.previous.items():
-            signal.signal(signum, signal.SIG_DFL if handler is None else handler)  # None: not set from Python
+        signals.restore(self.previous)
         return False
 
 

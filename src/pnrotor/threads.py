@@ -37,6 +37,8 @@ from contextlib import contextmanager
 import numba
 from numba.np.ufunc import parallel as _numba_parallel
 
+from pnrotor import signals
+
 __all__ = ["parts", "run", "thread_count", "limit", "limited", "stop_idle_workers"]
 
 _limit = None
@@ -233,12 +235,12 @@ def _sigint_held(stop=None):
     """On the main thread: a SIGINT during the block is recorded and raised again after it (a KeyboardInterrupt
     between two statements of :func:`run` could leave its counts wrong or its parts running after it); ``stop`` is
     called at once where the handler it goes to is Python's own, which raises KeyboardInterrupt (another might not
-    raise, and a call stopped early would return a partial result).  Elsewhere, or where Python does not own the
-    SIGINT handler, nothing."""
-    previous = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
-    if previous is None:
+    raise, and a call stopped early would return a partial result).  Elsewhere, or where pnrotor may not handle
+    SIGINT (`pnrotor.signals.free`: ignored, or the program's own handler), nothing."""
+    if not signals.free(signal.SIGINT):
         yield
         return
+    previous = signal.getsignal(signal.SIGINT)
     caught = []
 
     def held(signum, frame):

@@ -97,16 +97,16 @@ class Plan:
     def _run(self, start, progress):
         done = self._stored() if self.resume else {}
         tasks = [(i, params) for i, params in self.tasks if i not in done]
-        if self.scheduler is not None:
-            results = backends.results_dask(tasks, self.scheduler)
-        if self.tasks:
-            (self.parts / _TABLE).write_text(self._fingerprint())
-        if self.scheduler is None:
-            results = (backends.results_serial(tasks) if self.jobs == 1 or len(tasks) <= 1 else
-                       backends.results_pool(tasks, self.jobs, parts=self.parts, storage=self.storage))
-        evolve_seconds = 0.0
+        evolve_seconds, results = 0.0, None
         interrupted = _InterruptFlag()
         try:
+            if self.scheduler is not None:
+                results = backends.results_dask(tasks, self.scheduler)
+            if self.tasks:
+                (self.parts / _TABLE).write_text(self._fingerprint())
+            if self.scheduler is None:
+                results = (backends.results_serial(tasks) if self.jobs == 1 or len(tasks) <= 1 else
+                           backends.results_pool(tasks, self.jobs, parts=self.parts, storage=self.storage))
             with interrupted.deferred(), _progress_bar(len(tasks), enabled=progress) as bar:
                 for index, ok, result in interrupted.interruptible(results):
                     if ok and not isinstance(result, backends.Stored):   # this process's run: to its part file
@@ -118,13 +118,16 @@ class Plan:
                         self.rows[index].error = result
                     bar.update()
         except KeyboardInterrupt:
+            if results is not None:
+                results.close()   # the workers stopped, then counted: a part one wrote meanwhile is kept too
             kept = len(list(self.parts.glob("run-*.h5")))   # the workers' too, not only those reported yet
             if not kept:   # (and the folder goes)
                 raise KeyboardInterrupt("no run had finished; nothing kept") from None
             raise KeyboardInterrupt(f"{kept} finished run{'s' * (kept != 1)} kept in {self.parts}; "
                                     "complete the batch with --resume (resume=True)") from None
         finally:
-            results.close()  # stops the workers early after an error or Ctrl-C
+            if results is not None:
+                results.close()  # stops the workers early after an error
             interrupted.restore()
         written = self._assemble(done)
         briefs = {index: stored.brief for index, stored in done.items()}
@@ -306,15 +309,14 @@ class _InterruptFlag:
     def __init__(self):
         import signal
 
-        self.seen, self.defer, self.previous = False, False, None
-        try:
-            self.previous = signal.signal(signal.SIGINT, self._handle)
-        except ValueError:  # not the main thread: no handler of ours
-            pass
+        from pnrotor import signals
+
+        self.seen, self.defer = False, False
+        self.previous = signals.take(self._handle, [signal.SIGINT])   # none where SIGINT is ignored (`cmd &`)
 
     def _handle(self, signum, frame):
-        self.seen = True
-        if not self.defer:
+        first, self.seen = not self.seen, True
+        if first and not self.defer:   # a second Ctrl-C while the batch stops its workers: nothing more
             raise KeyboardInterrupt
 
     @contextlib.contextmanager
@@ -344,11 +346,10 @@ class _InterruptFlag:
             raise KeyboardInterrupt
 
     def restore(self):
-        if self.previous is not None:
-            import signal
+        from pnrotor import signals
 
-            signal.signal(signal.SIGINT, self.previous)
-            self.previous = None
+        signals.restore(self.previous)
+        self.previous = {}
 
 
 def _progress_bar(total, enabled):

@@ -113,14 +113,10 @@ def write_chunk(chunk, folder, storage):
     return results
 
 
-def _ignore_interrupts():
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle: it stops the workers
-
-
 def _preload():
-    _ignore_interrupts()
+    from pnrotor import signals
+
+    signals.leave_to_parent()   # Ctrl-C and SIGHUP are the parent's to handle: it stops the workers
     die_with_parent()
     import pnrotor.pn.evolve  # noqa: F401 - numba's kernels, loaded once per worker
     from pnrotor import threads
@@ -170,6 +166,8 @@ def results_pool(tasks, jobs, context=None, chunksize=None, parts=None, storage=
     from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
 
+    from pnrotor import signals
+
     size = chunksize or chunk_size(len(tasks), jobs)
     chunks = [tasks[i : i + size] for i in range(0, len(tasks), size)]
     mp_context = multiprocessing.get_context(context or start_method())
@@ -179,15 +177,17 @@ def results_pool(tasks, jobs, context=None, chunksize=None, parts=None, storage=
 
     def start(chunks, workers):
         """A pool of `workers` processes on `chunks` → (pool, {future: chunk} in submission order, chunks not
-        submitted because a worker died at once)."""
+        submitted because a worker died at once).  The workers start with SIGINT, SIGTERM and SIGHUP blocked
+        until `_preload` has set theirs (one that came before printed a worker's traceback)."""
         pool = ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=mp_context, initializer=_preload)
         futures = {}
         try:
-            for chunk in chunks:
-                if parts is None:
-                    futures[pool.submit(attempt_chunk, chunk)] = chunk
-                else:
-                    futures[pool.submit(write_chunk, chunk, parts, storage or {})] = chunk
+            with signals.blocked():   # the workers start (fork) in submit
+                for chunk in chunks:
+                    if parts is None:
+                        futures[pool.submit(attempt_chunk, chunk)] = chunk
+                    else:
+                        futures[pool.submit(write_chunk, chunk, parts, storage or {})] = chunk
         except BrokenProcessPool:
             pass  # a worker died at start-up: the chunks not submitted are lost with the others
         except BaseException:

@@ -6,7 +6,8 @@ an option several subcommands take is added by one helper here (`add_damping_opt
 Errors in the user's input (argparse's, ``ValueError``, ``FileNotFoundError``, ``FileExistsError``,
 ``IsADirectoryError``, or a `UsageError` raised by a subcommand) are printed as one line on stderr with
 exit status 2 and no traceback; other failures of the system (``OSError``: a full disk, a permission) as
-one line with exit status 1; Ctrl-C, SIGTERM and SIGHUP stop a command with exit status 130.
+one line with exit status 1; Ctrl-C, SIGTERM and SIGHUP stop a command with exit status 130 (a signal set to be
+ignored when the command starts, as ``nohup`` does SIGHUP, stays ignored: `pnrotor.signals`).
 """
 
 import argparse
@@ -15,7 +16,8 @@ import math
 import re
 import signal
 import sys
-import threading
+
+from pnrotor import signals
 
 SUBCOMMANDS = ("verify", "bench", "evolve", "inspect", "plot")
 
@@ -82,11 +84,8 @@ def _interrupt(signum, frame):
 def main(argv=None):
     parser = build_parser()
     args = parser.parse_args(argv)
-    previous = {}
-    if threading.current_thread() is threading.main_thread():  # SIGTERM and SIGHUP stop a command like Ctrl-C
-        for name in ("SIGTERM", "SIGHUP"):
-            if hasattr(signal, name):
-                previous[getattr(signal, name)] = signal.signal(getattr(signal, name), _interrupt)
+    # SIGTERM and SIGHUP stop a command like Ctrl-C
+    previous = signals.take(_interrupt, [s for s in signals.STOPPING if s != signal.SIGINT])
     try:
         return int(args.func(args) or 0)
     except (UsageError, ValueError, FileNotFoundError, FileExistsError, IsADirectoryError) as error:
@@ -102,8 +101,7 @@ def main(argv=None):
         print(f"pnrotor {args.command}: error: out of memory" + (f": {error}" if str(error) else ""), file=sys.stderr)
         return 1
     finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
+        signals.restore(previous)
 
 
 if __name__ == "__main__":
