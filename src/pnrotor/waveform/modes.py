@@ -193,47 +193,70 @@ def check_arguments(ell_max, amplitude_order, distance=None):
     return int(ell_max), int(order2), None if distance is None else _megaparsecs(distance)
 
 
-def _check_memory(count, samples, what):
-    """A ValueError naming ell_max and sampling if ``count`` modes of ``samples`` samples (complex128) would not fit in
-    the memory available (:func:`pnrotor.pn.sampling.available_memory`), before they are allocated."""
+def _check_memory(count, samples, what, streamed=False):
+    """A ValueError naming ell_max and sampling (and with ``streamed``, the streaming write) if ``count`` modes of
+    ``samples`` samples (complex128) would not fit in the memory available
+    (:func:`pnrotor.pn.sampling.available_memory`), before they are allocated."""
     need, free = 16 * count * samples, _sampling.available_memory()
     if not need < free:
+        stream = (", or write them to a file block by block from the binary's parameters: pnrotor.hdf5.write(path, "
+                  "pnrotor.stream(m1, m2, chi1, chi2, f_ref, delta_t=...).modes(...)) (pnrotor evolve --modes "
+                  "--sampling DT writes that way)") if streamed else ""
         raise ValueError(f"{what}: {count} modes of {samples} samples would need {need / 2 ** 30:.3g} GiB, more than the "
                          f"{free / 2 ** 30:.3g} GiB of memory available now; choose a smaller ell_max or a coarser "
-                         f"sampling")
+                         f"sampling{stream}")
 
 
 def _inertial(evolution, ell_max, order2, scale):
-    """h = 𝔇(R) H times ``scale``, in one pass of the amplitude kernel.  For a nonprecessing run the spins are
-    constant along ℓ̂ (folded into the coefficients) and R = R₀ exp(Φẑ/2) with R₀ the initial frame, so in the
-    default frame (R₀ = 1) h = H e^{−imΦ} (frame "z")."""
-    from pnrotor.pn.initial import frame_rotor
-
+    """h = 𝔇(R) H times ``scale``, in one pass of the amplitude kernel (spins and frame: :func:`spins_and_frame`)."""
     inputs = evolution.inputs
-    chi1 = chi2 = None
-    frame = "rotors"
     if inputs["state"] == "precessing":   # spins taken into the orbital frame inside the kernel
-        chi1, chi2 = evolution.chi1, evolution.chi2
+        chi1, chi2, frame = evolution.chi1, evolution.chi2, "rotors"
     else:
-        if inputs["spin_content"] == "aligned":
-            chi1, chi2 = (np.array([0.0, 0.0, np.dot(chi[0], evolution.ell_hat[0])])
-                          for chi in (evolution.chi1, evolution.chi2))
-        R0 = frame_rotor(np.asarray(inputs["ell_hat"]), np.asarray(inputs["n_hat"]))
-        if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]):
-            frame = "z"
+        chi1, chi2, frame = spins_and_frame(inputs, evolution.chi1[0], evolution.chi2[0], evolution.ell_hat[0])
     return modes_in_frame(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
                           inputs["kappa1"], inputs["kappa2"], R=evolution.R, frame=frame, scale=scale)
 
 
-def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
-    """Inertial-frame modes h_ℓm of ``evolution`` (module docstring) for ℓ ≤ ``ell_max`` (2 … 8) with
-    amplitude terms through ``amplitude_order`` (0 … 3.5 in steps of 0.5), as strain at ``distance``
-    (Mpc or an astropy length) or, without one, as r h / M.  Returns :class:`Modes`."""
-    if not isinstance(evolution, Evolution):
-        raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads), got "
-                        f"{type(evolution).__name__}")
+def spins_and_frame(inputs, chi1, chi2, ell_hat):
+    """(χ₁, χ₂, frame) of the amplitude kernel for a run on the aligned state (``inputs['state']``), whose spins chi1,
+    chi2 and ℓ̂ are constant: the spins are None (nonspinning) or their components along ℓ̂, (0, 0, χᵢ·ℓ̂), folded into
+    the coefficients, and R = R₀ exp(Φẑ/2) with R₀ the initial frame, so in the default frame (R₀ = 1) h = H e^{−imΦ}
+    (frame "z"), else "rotors"."""
+    from pnrotor.pn.initial import frame_rotor
+
+    if inputs["spin_content"] == "aligned":
+        chi1, chi2 = (np.array([0.0, 0.0, np.dot(chi, ell_hat)]) for chi in (chi1, chi2))
+    else:
+        chi1 = chi2 = None
+    R0 = frame_rotor(np.asarray(inputs["ell_hat"]), np.asarray(inputs["n_hat"]))
+    return chi1, chi2, "z" if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]) else "rotors"
+
+
+def modes(evolution, *args, **kwargs):
+    """Inertial-frame modes h_ℓm (module docstring) as :class:`Modes`, of a run or of a binary:
+
+    * ``modes(evolution, ell_max=8, amplitude_order=3.5, distance=None)``: of the samples of ``evolution`` (an
+      :class:`~pnrotor.pn.evolve.Evolution`), for ℓ ≤ ``ell_max`` (2 … 8) with amplitude terms through
+      ``amplitude_order`` (0 … 3.5 in steps of 0.5), as strain at ``distance`` (Mpc or an astropy length) or,
+      without one, as r h / M;
+    * ``modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=8,
+      amplitude_order=3.5, **evolve_options)``: the same of ``pnrotor.evolve(…, sampling=delta_t)``, bitwise,
+      computed from the integrator's dense output without its history (:func:`pnrotor.waveform.stream.modes`)."""
+    if isinstance(evolution, Evolution):
+        return _modes_of_run(evolution, *args, **kwargs)
+    if _real(evolution) or hasattr(evolution, "unit"):   # a mass (a number, or an astropy Quantity)
+        from pnrotor.waveform import stream
+
+        return stream.modes(evolution, *args, **kwargs)
+    raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads) or a "
+                    f"binary's m1, m2, chi1, chi2, f_ref with delta_t=..., got {type(evolution).__name__}")
+
+
+def _modes_of_run(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
+    """:func:`modes` of an Evolution."""
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
-    _check_memory(n_modes(ell_max), len(evolution), "modes()")
+    _check_memory(n_modes(ell_max), len(evolution), "modes()", streamed=True)
     inputs = evolution.inputs
     scale = 1.0 if distance_Mpc is None else _scale(None, distance_Mpc, inputs["M_seconds"])
     h = _inertial(evolution, ell_max, order2, scale)
