@@ -90,12 +90,14 @@ def child(which, f_start):
                     os.unlink(path)
             return len(modes)
     call(200.0)
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    before = resource.getrusage(resource.RUSAGE_SELF)
     t = time.perf_counter()
     n = call(f_start)
     wall = time.perf_counter() - t
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    print(json.dumps(dict(samples=n, seconds=wall, before_MB=before / 1024, peak_MB=peak / 1024)))
+    after = resource.getrusage(resource.RUSAGE_SELF)
+    print(json.dumps(dict(samples=n, seconds=wall, before_MB=before.ru_maxrss / 1024, peak_MB=after.ru_maxrss / 1024,
+                          user=after.ru_utime - before.ru_utime, sys=after.ru_stime - before.ru_stime,
+                          faults=after.ru_minflt - before.ru_minflt)))
 
 
 def available_GB():
@@ -161,6 +163,10 @@ def main():
         print(f"{f:7g} {n:10d} {span(lal_s) if lal_s else '-':>20s} {span(ours_s):>20s} {ratio:11.2f} "
               f"{per_sample[f]:9.1f} {peak(r['lal']) if r['lal'] else float('nan'):8.0f} {peak(r['ours']):10.0f} "
               f"{peak(r['ours']) * 2 ** 20 / (16 * n):15.2f}" + ("" if lal_n <= {n, n + 1, n - 1} else f"  (LAL {lal_n})"))
+    cpu = lambda xs: "/".join(f"{statistics.median(x[k] for x in xs):.2f}" for k in ("user", "sys"))  # noqa: E731
+    print("CPU seconds of the calls, user/sys (medians), and page faults: "
+          + "; ".join(f"{f:g} Hz LAL {cpu(r['lal']) if r['lal'] else '-'} ({r['lal'][0]['faults'] if r['lal'] else '-'}), "
+                      f"pnrotor {cpu(r['ours'])} ({r['ours'][0]['faults']})" for f, r in results.items()))
     best = min(per_sample.values())
     print(f"pnrotor's ns/sample from {min(per_sample)} to {max(per_sample)} Hz: {best:.1f} to {max(per_sample.values()):.1f} "
           f"(largest / smallest {max(per_sample.values()) / best:.2f})")

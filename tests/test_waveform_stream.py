@@ -261,6 +261,8 @@ def test_cli_writes_polarizations_beside_the_run_and_modes(tmp_path, capsys, mon
     expected = stream.polarizations(inclination=0.6, phi_ref=0.2, distance=40.0, ell_max=3).compute()
     np.testing.assert_array_equal(p.h_plus, expected.h_plus)
     assert (p.inclination, p.phi_ref, p.distance_Mpc) == (0.6, 0.2, 40.0)
+    assert main(["inspect", "w.h5", "--group", "polarizations"]) == 0
+    assert "h+, hx at inclination 0.6 rad, phi_ref 0.2 rad, strain at 40 Mpc" in capsys.readouterr().out
     for extra, message in ((["--polarizations", "--inclination", "1", "--distance", "1"], "needs a time step"),
                            (["--sampling", "1/4096", "--polarizations", "--distance", "1"], "needs --inclination"),
                            (["--sampling", "1/4096", "--inclination", "1"], "--inclination applies to --polarizations"),

@@ -1,5 +1,5 @@
-"""pnrotor's HDF5 files: run results (`FrameHistory`, `Evolution`, `Modes`, `PopulationTable`) to and from disk,
-atomic and versioned.
+"""pnrotor's HDF5 files: run results (`FrameHistory`, `Evolution`, `Modes`, `Polarizations`, `PopulationTable`) to and
+from disk, atomic and versioned.
 
 This module owns the file format (documented for readers without pnrotor in docs/hdf5-schema.md) and
 every write and read of it:
@@ -17,6 +17,8 @@ every write and read of it:
   Python ``int``/``float``/``bool``, strings exactly, after checking the run's layout (`layout_problems`: every
   field present with its type, the arrays of `ARRAYS` with their dtype, shape and finite values, the inputs
   and statistics of `REQUIRED_KEYS`); `write` checks the same before writing, so what it writes reads back.
+* A streamed result (``pnrotor.stream(...).modes()`` and the like, `_streamed`) is written as its whole run would
+  be, a block of samples at a time (`_put_streamed`): files larger than memory.
 * Writes are atomic. The file is built under a temporary name beside the target,
   ``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp``, fsynced (the writeback of each large dataset starts in a background thread
   while the next is written), then published as the target: linked to its name (`os.link`) if it is new, renamed

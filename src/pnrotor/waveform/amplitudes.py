@@ -12,7 +12,8 @@ term), S_ℓm in row ℓ + m and A_ℓm in row ℓ − m, which then become H_�
 evaluated for a mode, an order or a spin quantity nobody asked for (none for a nonspinning run), and spins
 that are the same at every sample (aligned ones) are folded into the coefficients.
 
-:func:`_sum` runs over blocks of samples (``wigner._CHUNK``) with the samples innermost: per block v^k, ln v
+:func:`_sum` runs over blocks of samples (``wigner._CHUNK``) with the samples innermost (the block functions
+:func:`_block_start` and :func:`_block_ell`, which :mod:`pnrotor.waveform.stream` calls too): per block v^k, ln v
 (only if a term needs it) and the spin quantities — for a precessing run of spins taken from the inertial
 frame into each sample's orbital frame, χ' = R⁻¹ χ R — then per ℓ the amplitudes and, without writing them
 out, the rotation to the inertial frame: H itself (co-orbital), H_ℓm e^{−imΦ} (a nonprecessing run in its

@@ -20,26 +20,25 @@ t = kΔt of ``sampling=Δt`` and nothing is computed per sample until asked:
 The modes and polarizations of a block are one compiled pass, :func:`_waves`, on the threads of
 :mod:`pnrotor.threads` (parts of ≥ :data:`pnrotor.waveform.wigner.MIN_PART` samples): per block of 256 samples
 (``wigner._CHUNK``) the states from the dense output (:func:`pnrotor.pn.sampling._fill_history`, the kernel of
-``evolve``'s sampling, on the segments from the block's first), the co-orbital amplitudes and their rotation to the
-inertial frame (:func:`pnrotor.waveform.amplitudes._block_start`, :func:`~pnrotor.waveform.amplitudes._block_ell`),
-and then either the modes stored or h₊ − i h× = Σ_ℓm h_ℓm ₋₂Y_ℓm(ι, π/2 − φ_ref) summed mode by mode
-(:mod:`pnrotor.waveform.polarizations`), so a polarizations call forms neither a history nor a mode array.
+``evolve``'s sampling, on the segments from the block's first), the co-orbital amplitudes and their rotation by
+𝔇 (:func:`pnrotor.waveform.amplitudes._block_start`, :func:`~pnrotor.waveform.amplitudes._block_ell`), then either
+the inertial modes stored, or, for h₊ − i h× = Σ_ℓm h_ℓm ₋₂Y_ℓm(ι, π/2 − φ_ref), the rotation taken to the frame of
+the line of sight, where the sum over m is its m = 2 term alone (:func:`_line_of_sight`): one mode per ℓ of the
+rotation's second product, summed at once, so a polarizations call forms neither a history nor a mode array.
 The history of :meth:`Stream.evolution` is ``_fill_history`` itself, a block at a time.
 
 The numbers are those of ``evolve(…, sampling=Δt)`` → ``modes(run, …)`` → ``Modes.polarizations(ι, φ_ref)``: the
-same kernels on the same samples in the same blocks of 256 (the parts and blocks start at multiples of 256), so the
-history and the modes are bitwise the same, and the polarizations add the same products in the same order as
-numpy's ``h += row * Y`` (bitwise on this machine's numpy; the tests allow 1e-13 of max|h|, as another build of
-numpy may fuse its complex product differently).  ``pnrotor.threads`` splits the samples, so the thread count does
-not change them either.  The kernel holds ``_fill_history`` (:mod:`pnrotor.pn.sampling`), the block functions of
-:mod:`pnrotor.waveform.amplitudes` and :func:`pnrotor.waveform.wigner._store` (numba caches per source file): after
-editing those, remove this module's ``__pycache__/stream.*.nb*``.
+history and the modes bitwise (the same kernels on the same samples in the same blocks of 256: the parts and blocks
+start at multiples of 256), the polarizations to rounding (another rotation of the same modes; ≤ 2e-15 of max|h| on
+the tests' BBH, NSBH and BNS, which allow 1e-13; summing all the inertial modes, as ``Modes.polarizations`` does,
+would give them bitwise at a higher cost).  ``pnrotor.threads`` splits the samples, so the thread count does not change any of them.  The kernel holds
+``_fill_history`` (:mod:`pnrotor.pn.sampling`), the block functions of :mod:`pnrotor.waveform.amplitudes` and
+:func:`pnrotor.waveform.wigner._store` (numba caches per source file): after editing those, remove this module's
+``__pycache__/stream.*.nb*``.
 """
 
 import math
 import time
-from dataclasses import dataclass
-
 import numpy as np
 from numba import njit
 
@@ -330,8 +329,7 @@ def _segment(seg_t, seg_h, t):
 
 @njit(cache=True, fastmath={"contract"})
 def _add_times(x, r, yr, yi, acc_re, acc_im, nb):
-    """acc += (row r of x, complex numbers as (re, im) pairs) × (yr + i yi), the product rounded before it is added:
-    numpy's ``h += row * Y``."""
+    """acc += (row r of x, complex numbers as (re, im) pairs) × (yr + i yi), the product rounded before it is added."""
     for s in range(nb):
         xr, xi = x[r, 2 * s], x[r, 2 * s + 1]
         pr = xr * yr - xi * yi
