@@ -49,9 +49,8 @@ from pnrotor.pn.evolve import _OPTIONS, Evolution, integrate
 from pnrotor.pn.sampling import MODE_ALIGNED, _fill_history
 from pnrotor.pn.settings import settings
 from pnrotor.waveform import amplitudes as _amp
-from pnrotor.waveform import polarizations as _pol
-from pnrotor.waveform.layout import ell_m, mode_index, n_modes
-from pnrotor.waveform.modes import ELL_MAX, Modes, _angle, _megaparsecs, _scale, check_arguments, spins_and_frame
+from pnrotor.waveform.layout import mode_index, n_modes
+from pnrotor.waveform.modes import ELL_MAX, Modes, _angle, _scale, check_arguments, spins_and_frame
 from pnrotor.waveform.polarizations import Polarizations
 from pnrotor.waveform.wigner import _CHUNK, MIN_PART, _store
 
@@ -97,7 +96,7 @@ def _segments(res):
 
 class Stream:
     """A PN run integrated on the grid t = k Δt of its ``sampling`` (:func:`stream`), its samples computed when asked:
-    ``len(stream)`` samples, t from ``t_start`` (in M; t = 0 at f_ref); ``termination``, ``stats`` and ``inputs`` as
+    ``len(stream)`` samples (t = 0 at f_ref); ``termination``, ``stats`` and ``inputs`` as
     the :class:`~pnrotor.pn.evolve.Evolution`'s (``stats['wall_time_s']`` up to the integration).  Its
     :meth:`evolution`, :meth:`modes` and :meth:`polarizations` are :class:`Streamed`."""
 
@@ -112,7 +111,6 @@ class Stream:
         self._forward, self._backward = _segments(res_f), _segments(res_b)
         self._mode = _sampling.output_mode(s.use_aligned, s.rotor)
         self._fixed = _sampling._fixed(s)
-        self.t_start = k_lo * self._dt
 
     def __len__(self):
         return self._n
