@@ -38,7 +38,9 @@ would give them bitwise at a higher cost).  ``pnrotor.threads`` splits the sampl
 """
 
 import math
+import mmap
 import time
+
 import numpy as np
 from numba import njit
 
@@ -153,8 +155,8 @@ class Stream:
         count = n_modes(ell_max)
 
         def block(lo, hi):
-            t, t_s, Phi, R = np.empty(hi - lo), np.empty(hi - lo), np.empty(hi - lo), np.empty((hi - lo, 4))
-            data = np.empty((count, hi - lo), dtype=np.complex128)
+            t, t_s, Phi, R = _empty(hi - lo), _empty(hi - lo), _empty(hi - lo), _empty((hi - lo, 4))
+            data = _empty((count, hi - lo), np.complex128)
             self._run(args, _NONE, (t, t_s, Phi, R, data.view(np.float64), _NONE, _NONE), lo, hi)
             return Modes(t=t, t_seconds=t_s, ell_max=ell_max, data=data, frame="inertial", R=R, Phi=Phi,
                          distance_Mpc=distance_Mpc, inputs=dict(inputs))
@@ -177,7 +179,7 @@ class Stream:
         inputs = dict(self.inputs, ell_max=ell_max, amplitude_order=order2 / 2)
 
         def block(lo, hi):
-            t_s, hp, hc = np.empty(hi - lo), np.empty(hi - lo), np.empty(hi - lo)
+            t_s, hp, hc = _empty(hi - lo), _empty(hi - lo), _empty(hi - lo)
             self._run(args, weights, (_NONE, t_s, _NONE, _NO_ROTORS, _NO_MODES, hp, hc), lo, hi)
             return Polarizations(t_seconds=t_s, h_plus=hp, h_cross=hc, inclination=inclination, phi_ref=phi_ref,
                                  distance_Mpc=distance_Mpc, inputs=dict(inputs))
@@ -243,6 +245,16 @@ def _m2_plan(first, rows, coefs, ell_max):
         keep += [k for k in range(first[2 * ell + 1], first[2 * ell + 2]) if rows[k, 0] == ell + 2]
         new_first[2 * ell + 2:] = len(keep)
     return new_first, np.ascontiguousarray(rows[keep]), np.ascontiguousarray(coefs[keep])
+
+
+def _empty(shape, dtype=np.float64):
+    """A new C-contiguous array for the kernel to fill, in anonymous memory of the system's base pages (``mmap``)
+    rather than numpy's: numpy asks Linux for transparent huge pages for arrays of 4 MiB or more, and on the virtual
+    machines pnrotor is measured on their first touch costs several times the system time of base pages
+    (benchmarks/bench_long.py; LAL's arrays, from malloc, get base pages).  Freed with the array."""
+    count = int(np.prod(shape))
+    memory = mmap.mmap(-1, max(count, 1) * np.dtype(dtype).itemsize)
+    return np.frombuffer(memory, dtype=dtype, count=count).reshape(shape)
 
 
 _NONE = np.empty(0)
