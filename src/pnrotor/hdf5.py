@@ -843,14 +843,7 @@ def _streamed_chunks(shape, axis, itemsize, compression, checksum):
         return {}
     step = itemsize * int(np.prod(shape[axis + 1:]))
     length = min(shape[axis], 1 << max(0, (_CHUNK_BYTES // step).bit_length() - 1), _STREAM_SAMPLES)
-    options = {"chunks": (1,) * axis + (max(length, 1),) + tuple(shape[axis + 1:])}
-    if checksum:
-        options["fletcher32"] = True
-    if compression:
-        options.update(compression=compression, shuffle=True)
-        if compression == "gzip":
-            options["compression_opts"] = _GZIP_LEVEL
-    return options
+    return {"chunks": (1,) * axis + (max(length, 1),) + tuple(shape[axis + 1:]), **_filters(compression, checksum)}
 
 
 def _strings_crc(values):
@@ -951,18 +944,24 @@ def _dataset(g, name, array, compression, checksum):
         rows = array.shape[0]
         nchunks = -(-rows * array.itemsize * (array.size // rows) // _CHUNK_BYTES)  # ceiling division
         options["chunks"] = (-(-rows // nchunks),) + array.shape[1:]  # equal chunks: no padding in the last
-        if checksum:  # a checksum per chunk: damaged bytes give an error, not wrong numbers
-            options["fletcher32"] = True
-        if compression:
-            options.update(compression=compression, shuffle=True)
-            if compression == "gzip":
-                options["compression_opts"] = _GZIP_LEVEL
+        options.update(_filters(compression, checksum))
     dataset = g.create_dataset(name, data=array, **options)
     if "chunks" in options:   # HDF5 keeps the last chunks in its cache: written now, a full disk raises here
         dataset.flush()       # rather than in the dataset's deallocation, where h5py can only print it
     if array.nbytes >= _WRITEBACK_BYTES and g.file.filename in _WRITEBACKS:
         _WRITEBACKS[g.file.filename].start()
     return dataset
+
+
+def _filters(compression, checksum):
+    """The filters of a chunked dataset: a Fletcher-32 checksum per chunk with `checksum` (damaged bytes give an
+    error, not wrong numbers), shuffle and `compression`."""
+    options = {"fletcher32": True} if checksum else {}
+    if compression:
+        options.update(compression=compression, shuffle=True)
+        if compression == "gzip":
+            options["compression_opts"] = _GZIP_LEVEL
+    return options
 
 
 _HOST = socket.gethostname().replace(".", "-").replace("/", "-") or "host"

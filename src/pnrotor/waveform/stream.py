@@ -247,14 +247,20 @@ def _m2_plan(first, rows, coefs, ell_max):
     return new_first, np.ascontiguousarray(rows[keep]), np.ascontiguousarray(coefs[keep])
 
 
+_HUGE_PAGES_FROM = 1 << 22
+"""Bytes from which numpy asks Linux for transparent huge pages for an array (numpy's ``madvise`` threshold)."""
+
+
 def _empty(shape, dtype=np.float64):
-    """A new C-contiguous array for the kernel to fill, in anonymous memory of the system's base pages (``mmap``)
-    rather than numpy's: numpy asks Linux for transparent huge pages for arrays of 4 MiB or more, and on the virtual
-    machines pnrotor is measured on their first touch costs several times the system time of base pages
+    """A new C-contiguous array for the kernel to fill; from :data:`_HUGE_PAGES_FROM` bytes in anonymous memory of the
+    system's base pages (``mmap``) rather than numpy's: numpy asks for transparent huge pages there, and on the
+    virtual machines pnrotor is measured on their first touch costs several times the system time of base pages
     (benchmarks/bench_long.py; LAL's arrays, from malloc, get base pages).  Freed with the array."""
     count = int(np.prod(shape))
-    memory = mmap.mmap(-1, max(count, 1) * np.dtype(dtype).itemsize)
-    return np.frombuffer(memory, dtype=dtype, count=count).reshape(shape)
+    size = count * np.dtype(dtype).itemsize
+    if size < _HUGE_PAGES_FROM:   # below it a system call would cost more than it saves
+        return np.empty(shape, dtype)
+    return np.frombuffer(mmap.mmap(-1, size), dtype=dtype, count=count).reshape(shape)
 
 
 _NONE = np.empty(0)
