@@ -11,7 +11,7 @@ the end of the inspiral, seen at inclination 0.5 rad, φ_ref = 0, 100 Mpc:
   1.5PN terms), on pnrotor's threads (two here; LAL uses one).
 
 Every call runs in a fresh process of its own (this script with ``--child``): the process imports its code and makes
-one small call first (numba's cache loaded, LAL's set-ups), then times the call and reads its peak resident memory
+one small call first (numba's cache loaded, pnrotor's worker thread started, LAL's set-ups), then times the call and reads its peak resident memory
 (``ru_maxrss``) before and after: the call's peak is the difference, set against the 16 bytes per sample of the two
 output arrays h₊, h× (pnrotor also returns t: 24 bytes per sample in all).  A fresh process pays the first touch of
 its output's pages, as a new call of a long-running program does after the memory went back to the system (about
@@ -89,7 +89,7 @@ def child(which, f_start):
                 if os.path.exists(path):
                     os.unlink(path)
             return len(modes)
-    call(200.0)
+    call(150.0)   # 3,500 samples: numba's cache loaded, pnrotor's worker thread started, LAL's set-ups made
     before = resource.getrusage(resource.RUSAGE_SELF)
     t = time.perf_counter()
     n = call(f_start)
