@@ -524,9 +524,9 @@ def test_modes_written_beside_the_run(in_tmp, capsys):
     (["--modes", "--ell-max", "9"], "ell_max must be an integer from 2 to 8"),
     (["--modes", "--amplitude-order", "1.25"], "amplitude_order must be one of"),
     (["--modes", "--distance", "-3"], "distance must be a finite positive"),
-    (["--ell-max", "4"], "--ell-max applies to --modes runs only"),
-    (["--amplitude-order", "7"], "--amplitude-order applies to --modes runs only"),
-    (["--distance", "-3"], "--distance applies to --modes runs only"),
+    (["--ell-max", "4"], "--ell-max applies to --modes and --polarizations runs only"),
+    (["--amplitude-order", "7"], "--amplitude-order applies to --modes and --polarizations runs only"),
+    (["--distance", "-3"], "--distance applies to --modes and --polarizations runs only"),
 ])
 def test_bad_modes_options_exit_2_before_running(extra, message, in_tmp, capsys, monkeypatch):
     monkeypatch.setattr(backends, "evolve_row", lambda params: pytest.fail("ran"))
@@ -599,14 +599,17 @@ def test_out_of_memory_is_one_line_and_leaves_no_file(in_tmp, capsys, monkeypatc
 
 
 def test_modes_defaults_are_those_of_pnrotor_modes():
-    """The CLI keeps copies of modes()' defaults (parsing does not import numba): they must be modes()' own."""
+    """The CLI keeps copies of modes()' defaults (parsing does not import numba): they must be modes()' own, of a run
+    and of a binary, and those of the polarizations."""
     import inspect
 
     from pnrotor.cli import evolve as cli_evolve
-    from pnrotor.waveform.modes import modes
-    defaults = inspect.signature(modes).parameters
-    assert (cli_evolve.ELL_MAX, cli_evolve.AMPLITUDE_ORDER) == (defaults["ell_max"].default,
-                                                                defaults["amplitude_order"].default)
+    from pnrotor.waveform import modes, stream
+    for function in (modes._modes_of_run, stream.modes, stream.polarizations, stream.Stream.modes,
+                     stream.Stream.polarizations):
+        defaults = inspect.signature(function).parameters
+        assert (cli_evolve.ELL_MAX, cli_evolve.AMPLITUDE_ORDER) == (defaults["ell_max"].default,
+                                                                    defaults["amplitude_order"].default)
 
 
 def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):

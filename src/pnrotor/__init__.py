@@ -11,6 +11,8 @@ _EXPORTS = {
     "Population": "pnrotor.pn.many",
     "modes": "pnrotor.waveform.modes",
     "Modes": "pnrotor.waveform.modes",
+    "polarizations": "pnrotor.waveform.stream",
+    "stream": "pnrotor.waveform.stream",
 }
 
 

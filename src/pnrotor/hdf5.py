@@ -1,5 +1,5 @@
-"""pnrotor's HDF5 files: run results (`FrameHistory`, `Evolution`, `Modes`, `PopulationTable`) to and from disk,
-atomic and versioned.
+"""pnrotor's HDF5 files: run results (`FrameHistory`, `Evolution`, `Modes`, `Polarizations`, `PopulationTable`) to and
+from disk, atomic and versioned.
 
 This module owns the file format (documented for readers without pnrotor in docs/hdf5-schema.md) and
 every write and read of it:
@@ -17,6 +17,8 @@ every write and read of it:
   Python ``int``/``float``/``bool``, strings exactly, after checking the run's layout (`layout_problems`: every
   field present with its type, the arrays of `ARRAYS` with their dtype, shape and finite values, the inputs
   and statistics of `REQUIRED_KEYS`); `write` checks the same before writing, so what it writes reads back.
+* A streamed result (``pnrotor.stream(...).modes()`` and the like, `_streamed`) is written as its whole run would
+  be, a block of samples at a time (`_put_streamed`): files larger than memory.
 * Writes are atomic. The file is built under a temporary name beside the target,
   ``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp``, fsynced (the writeback of each large dataset starts in a background thread
   while the next is written), then published as the target: linked to its name (`os.link`) if it is new, renamed
@@ -71,6 +73,7 @@ KINDS = {
     "FrameHistory": "pnrotor.history:FrameHistory",
     "Evolution": "pnrotor.pn.evolve:Evolution",
     "Modes": "pnrotor.waveform.modes:Modes",
+    "Polarizations": "pnrotor.waveform.polarizations:Polarizations",
     "PopulationTable": "pnrotor.batch.population:PopulationTable",
 }
 """The ``kind`` attribute → ``module:class`` of the dataclass it names, imported when a file is read."""
@@ -94,6 +97,7 @@ _CHUNK_BYTES = 1 << 20  # chunks of at most about 1 MiB along the first (time) a
 _WRITEBACK_BYTES = 1 << 20  # a dataset this large starts the writeback of the file to disk in the background
 _GZIP_LEVEL = 1  # on 10⁶-sample PN-like data level 4 saved 1.5% of the size for 1.7× the write time
 _TEMPORARY_SUFFIX = ".pnrotor-tmp"
+_STREAM_SAMPLES = 1 << 17  # samples per block of a streamed run: a multiple of each of its chunks (of <= 1 MiB)
 
 
 
@@ -136,6 +140,12 @@ ARRAYS = {
                       "(l, m) with k = l (l + 1) + m - 4, l = 2 ... ell_max (LALSuite's convention)", "complex128"),
         "R": _ROTOR,
         "Phi": Array(("N",), "rad; orbital phase"),
+    },
+    "Polarizations": {
+        "t_seconds": Array(("N",), "s; t = 0 at f_ref"),
+        "h_plus": Array(("N",), "strain at distance_Mpc; h+ - i hx = sum of h_lm -2Y_lm(inclination, pi/2 - phi_ref) "
+                        "(LALSuite's convention)"),
+        "h_cross": Array(("N",), "strain at distance_Mpc"),
     },
     "PopulationTable": {
         "name": Array(("N",), "the row's name (the batch table's name column, or its default name)", "str"),
@@ -216,9 +226,18 @@ def write(path, run, *, overwrite=False, compression=None, checksum=True, group=
 
     The run is checked first as `read` checks it (`layout_problems`: a `ValueError` naming the run's type
     and every problem, e.g. a NaN in ``v``), so that every file written reads back.
+
+    A streamed result (``pnrotor.stream(...).evolution()``, ``.modes(...)``, ``.polarizations(...)``) is computed and
+    written a block of samples at a time into chunked datasets (or contiguous ones, with ``checksum=False`` and no
+    compression), each block checked as a run is: the file is the one its ``compute()`` would give, and needs
+    memory for one block, not for the run (docs/hdf5-schema.md).
     """
     path = Path(path)
-    _check_run(run)
+    if _streamed(run):
+        first = _first_block(run)
+    else:
+        first = None
+        _check_run(run)
     _check_compression(compression)
     _check_checksum(checksum)
     if group is not None:
@@ -227,10 +246,20 @@ def write(path, run, *, overwrite=False, compression=None, checksum=True, group=
             runs.add(group, run)  # checks the run
         return path
     _check_target(path, overwrite)
-    _check_space(path, _run_bytes(run), compression)
+    _check_space(path, _run_bytes(run) if first is None else _streamed_bytes(run, first), compression)
     with _replacing(path, overwrite) as f:
-        _put_run(f, run, compression, checksum)
+        if first is None:
+            _put_run(f, run, compression, checksum)
+        else:
+            _put_streamed(f, run, first, compression, checksum)
     return path
+
+
+def _streamed(run):
+    """Whether `run` is a streamed result (`pnrotor.stream(...).modes()` and the like): not a run dataclass, but
+    ``len(run)`` samples and ``run.block(lo, hi)``, the run dataclass of samples lo ... hi-1, which `write` and
+    `Batch.add` write block by block."""
+    return not dataclasses.is_dataclass(run) and callable(getattr(run, "block", None))
 
 
 @contextmanager
@@ -297,7 +326,14 @@ class Batch:
         return len(self.names)
 
     def add(self, name, run):
-        """Write the run dataclass `run` as the run `name`, by the rules of `write` (checked as it checks)."""
+        """Write the run dataclass `run` (or a streamed result, block by block) as the run `name`, by the rules of
+        `write` (checked as it checks)."""
+        if _streamed(run):
+            first = _first_block(run)
+            _check_space(self.path, _streamed_bytes(run, first), self.compression)
+            with self._adding(name) as f:
+                _put_streamed(f.create_group(name), run, first, self.compression, self.checksum)
+            return
         _check_run(run)
         _check_space(self.path, _run_bytes(run), self.compression)
         with self._adding(name) as f:
@@ -741,14 +777,69 @@ class _Writeback:
             pass
 
 
-def _put_run(g, run, compression, checksum):
-    """Store the run dataclass `run` in group `g`: its metadata attributes, its fields, then the CRC of its
-    strings."""
+def _put_run(g, run, compression, checksum, written=()):
+    """Store the run dataclass `run` in group `g`: its metadata attributes, its fields (but those `written`
+    already), then the CRC of its strings."""
     kind = _kind_of(run)
     metadata = _put_metadata(g, kind)
-    _put_fields(g, run, UNITS.get(kind, {}), (compression, checksum))
+    _put_fields(g, run, UNITS.get(kind, {}), (compression, checksum), written)
     fields = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
     g.attrs[_STRINGS_CRC] = np.uint32(_strings_crc({**metadata, **fields}))
+
+
+def _first_block(streamed):
+    """The first block of a streamed result, checked as `write` checks a run."""
+    first = streamed.block(0, min(len(streamed), _STREAM_SAMPLES))
+    _check_run(first)
+    return first
+
+
+def _streamed_bytes(streamed, first):
+    """Bytes of the arrays of a streamed result of which `first` is the first block (all of them per sample)."""
+    return _run_bytes(first) * len(streamed) // len(first.t_seconds)
+
+
+def _put_streamed(g, streamed, first, compression, checksum):
+    """Store the streamed result `streamed` in group `g` as `_put_run` stores its whole run: datasets of its arrays
+    (those of `ARRAYS`, each with a time axis "N") created at full length, then filled a block of `_STREAM_SAMPLES`
+    at a time (`first` the first, each block checked before it is written), then the other fields and the CRC from
+    the first block.  Chunks run along the time axis, `_streamed_chunks`."""
+    n, kind = len(streamed), _kind_of(first)
+    axes = {name: spec.shape.index("N") for name, spec in ARRAYS[kind].items()}
+    datasets = {}
+    for name, axis in axes.items():
+        array = getattr(first, name)
+        shape = array.shape[:axis] + (n,) + array.shape[axis + 1:]
+        options = _streamed_chunks(shape, axis, array.itemsize, compression, checksum)
+        datasets[name] = g.create_dataset(name, shape=shape, dtype=array.dtype, **options)
+    block, lo = first, 0
+    while True:
+        hi = lo + len(block.t_seconds)
+        for name, axis in axes.items():
+            datasets[name][(slice(None),) * axis + (slice(lo, hi),)] = getattr(block, name)
+        if g.file.filename in _WRITEBACKS:
+            _WRITEBACKS[g.file.filename].start()
+        if hi == n:
+            break
+        block, lo = streamed.block(hi, min(n, hi + _STREAM_SAMPLES)), hi
+        try:
+            _check_run(block)
+        except ValueError as error:
+            raise ValueError(f"{error} (of samples {lo} ... {lo + len(block.t_seconds) - 1})") from None
+    for dataset in datasets.values():
+        dataset.flush()   # as `_dataset`: a full disk raises here, not in the dataset's deallocation
+    _put_run(g, first, compression, checksum, written=set(datasets))
+
+
+def _streamed_chunks(shape, axis, itemsize, compression, checksum):
+    """`create_dataset` options of a streamed array: with `compression` or `checksum` (as `_dataset`) chunks of 2^k
+    steps along the time axis `axis`, at most about 1 MiB and 2^17 steps (a block divides into them), of the whole
+    extent of the later axes and one step of the earlier ones (a mode of `Modes.data` is read without the others)."""
+    if not (compression or checksum):
+        return {}
+    step = itemsize * int(np.prod(shape[axis + 1:]))
+    length = min(shape[axis], 1 << max(0, (_CHUNK_BYTES // step).bit_length() - 1), _STREAM_SAMPLES)
+    return {"chunks": (1,) * axis + (max(length, 1),) + tuple(shape[axis + 1:]), **_filters(compression, checksum)}
 
 
 def _strings_crc(values):
@@ -781,9 +872,11 @@ def _put_metadata(g, kind):
     return metadata
 
 
-def _put_fields(g, run, units, storage):
+def _put_fields(g, run, units, storage, written=()):
     cls = type(run)
     for field in dataclasses.fields(run):
+        if field.name in written:
+            continue
         value = getattr(run, field.name)
         if field.name in NOT_WRITTEN or callable(value):
             if field.name not in _defaulted(cls):
@@ -847,18 +940,24 @@ def _dataset(g, name, array, compression, checksum):
         rows = array.shape[0]
         nchunks = -(-rows * array.itemsize * (array.size // rows) // _CHUNK_BYTES)  # ceiling division
         options["chunks"] = (-(-rows // nchunks),) + array.shape[1:]  # equal chunks: no padding in the last
-        if checksum:  # a checksum per chunk: damaged bytes give an error, not wrong numbers
-            options["fletcher32"] = True
-        if compression:
-            options.update(compression=compression, shuffle=True)
-            if compression == "gzip":
-                options["compression_opts"] = _GZIP_LEVEL
+        options.update(_filters(compression, checksum))
     dataset = g.create_dataset(name, data=array, **options)
     if "chunks" in options:   # HDF5 keeps the last chunks in its cache: written now, a full disk raises here
         dataset.flush()       # rather than in the dataset's deallocation, where h5py can only print it
     if array.nbytes >= _WRITEBACK_BYTES and g.file.filename in _WRITEBACKS:
         _WRITEBACKS[g.file.filename].start()
     return dataset
+
+
+def _filters(compression, checksum):
+    """The filters of a chunked dataset: a Fletcher-32 checksum per chunk with `checksum` (damaged bytes give an
+    error, not wrong numbers), shuffle and `compression`."""
+    options = {"fletcher32": True} if checksum else {}
+    if compression:
+        options.update(compression=compression, shuffle=True)
+        if compression == "gzip":
+            options["compression_opts"] = _GZIP_LEVEL
+    return options
 
 
 _HOST = socket.gethostname().replace(".", "-").replace("/", "-") or "host"

@@ -7,7 +7,8 @@ stores them beside the sources in ``__pycache__``, or in ``NUMBA_CACHE_DIR`` whe
 folder numba would use (:func:`cache_folder`), so that a caller can say what the wait is.  numba compiles one
 function at a time in a process, and the biggest units take ~12 s each here: on a cold cache
 :func:`compile_aside` compiles the DOP853 core (``'core'``), and for a run whose modes will be written the
-modes kernels (``'modes'``), each in a process of its own while this one compiles the rest of its run
+modes kernels (``'modes'``; ``'waves'`` for a uniformly sampled run, whose modes and polarizations are computed as
+they are written), each in a process of its own while this one compiles the rest of its run
 (parameters, right-hand side, events); their first use waits for that process (:func:`wait_for_aside`) and loads
 what it cached (``pnrotor.ode.common.entry_point``, ``pnrotor.waveform.amplitudes.modes_in_frame``).  A cold
 ``pnrotor evolve --modes`` (30 + 10 precessing) took 26-32 s with the modes kernels compiled after the run, in
@@ -24,7 +25,8 @@ from importlib.util import find_spec
 __all__ = ["is_cold", "cache_folder", "compile_aside", "wait_for_aside"]
 
 _ASIDE_CODE = {"core": "from pnrotor.ode.dop853 import compile_core; compile_core()",
-               "modes": "from pnrotor.waveform.amplitudes import compile_kernels; compile_kernels()"}
+               "modes": "from pnrotor.waveform.amplitudes import compile_kernels; compile_kernels()",
+               "waves": "from pnrotor.waveform.stream import compile_kernels; compile_kernels()"}
 """What :func:`compile_aside` can compile, and the code its process runs."""
 
 _asides = {}
@@ -54,7 +56,7 @@ def cache_folder(package="ode"):
 
 
 def compile_aside(what):
-    """Start compiling ``what`` ('core' or 'modes', module docstring) into numba's cache in another process; it
+    """Start compiling ``what`` ('core', 'modes' or 'waves', module docstring) into numba's cache in another process; it
     dies with this one.  Nothing is lost if it fails: the first use then compiles it here."""
     from pnrotor.processes import die_with_parent
 

@@ -31,6 +31,7 @@ are usage errors with it; -o, --overwrite, the storage options and the exit stat
 The PN code (numba) is imported only when a run starts, so that the CLI starts quickly.
 """
 
+import dataclasses
 import math
 import sys
 import time
@@ -44,7 +45,8 @@ PRECESSION = ("averaged", "averaged_varpi", "instantaneous")
 ELL_MAX, AMPLITUDE_ORDER = 8, 3.5
 """--ell-max and --amplitude-order when not given: copies of `pnrotor.modes`' defaults, so that parsing the command
 line does not import numba (tests/test_cli_evolve.py checks that they agree)."""
-NOT_WITH_POPULATION = ("jobs", "scheduler", "resume", "modes", "ell_max", "amplitude_order", "distance")
+NOT_WITH_POPULATION = ("jobs", "scheduler", "resume", "modes", "ell_max", "amplitude_order", "distance",
+                       "polarizations", "inclination", "phi_ref")
 """Options of the other batch modes, refused with --population."""
 
 
@@ -106,7 +108,17 @@ def add_parser(subparsers):
     waves.add_argument("--amplitude-order", type=float, metavar="A",
                        help=f"PN amplitude order 0, 0.5, ..., 4 (default {AMPLITUDE_ORDER})")
     waves.add_argument("--distance", type=float, metavar="MPC",
-                       help="store the modes as strain at this distance in Mpc (default: r h / M)")
+                       help="store the modes as strain at this distance in Mpc (default: r h / M); the distance of "
+                       "--polarizations")
+    waves.add_argument("--polarizations", action="store_true",
+                       help="also compute h+, hx (pnrotor.stream(...).polarizations) seen at --inclination and "
+                       "--phi-ref as strain at --distance, from the modes l <= --ell-max, and write them as the group "
+                       "polarizations; needs a time step --sampling DT (one run, not --batch)")
+    waves.add_argument("--inclination", type=float, metavar="RAD",
+                       help="inclination of the line of sight of --polarizations, in radians")
+    waves.add_argument("--phi-ref", type=float, metavar="RAD",
+                       help="reference phase of --polarizations in radians (default 0): the line of sight is "
+                       "(inclination, pi/2 - phi_ref) in the frame of the run, as LALSuite's")
     output.add_argument("-q", "--quiet", action="store_true",
                         help="print only the output file, failures and the batch's last line; no progress bar")
     batch = parser.add_argument_group("batch")
@@ -126,7 +138,7 @@ def add_parser(subparsers):
     parser.set_defaults(func=run)
 
 
-def _warn_if_cold(here=True, population=False, modes=False):
+def _warn_if_cold(here=True, population=False, modes=False, streamed=False):
     """One line on stderr before numba compiles pnrotor's kernels for the first time, not a silent wait; if
     this process runs the evolutions (``here``), the biggest kernel, the DOP853 core, is compiled in a second
     process meanwhile (`pnrotor.numba_cache.compile_aside`; worker processes compile their own), and so are the
@@ -137,7 +149,8 @@ def _warn_if_cold(here=True, population=False, modes=False):
     from pnrotor import numba_cache
 
     core = numba_cache.is_cold()
-    waves = modes and numba_cache.is_cold("amplitudes._sum", "waveform")
+    kernel = "waves" if streamed else "modes"   # a uniform run's waves are computed as they are written
+    waves = modes and numba_cache.is_cold("stream._waves" if streamed else "amplitudes._sum", "waveform")
     if core or waves or population and numba_cache.is_cold("many._integrate_all", "pn"):
         # measured on a 2-core VM in its fast and slow phases (the README's cold start)
         wait = "~35-45" if population else "~20-35" if waves else "~10-25"
@@ -146,7 +159,7 @@ def _warn_if_cold(here=True, population=False, modes=False):
         if here and core:
             numba_cache.compile_aside("core")
         if here and waves:
-            numba_cache.compile_aside("modes")
+            numba_cache.compile_aside(kernel)
         if here and core:
             from pnrotor.ode.dop853 import compile_core_parts
 
@@ -158,8 +171,13 @@ def run(args):
         if getattr(args, option) and args.batch is None:
             raise UsageError(f"--{option} applies to --batch runs only")
     for option in ("ell_max", "amplitude_order", "distance"):
-        if getattr(args, option) is not None and not (args.modes or args.population):   # --population refuses them
-            raise UsageError(f"--{option.replace('_', '-')} applies to --modes runs only")
+        if getattr(args, option) is not None and not (args.modes or args.polarizations or args.population):
+            raise UsageError(f"--{option.replace('_', '-')} applies to --modes and --polarizations runs only")
+    for option in ("inclination", "phi_ref"):
+        if getattr(args, option) is not None and not (args.polarizations or args.population):
+            raise UsageError(f"--{option.replace('_', '-')} applies to --polarizations runs only")
+    if args.polarizations and args.batch is not None and not args.population:
+        raise UsageError("--polarizations applies to one run, not to --batch")
     if args.batch is not None:
         return _run_batch(args)
     for option in ("jobs", "scheduler"):
@@ -203,38 +221,78 @@ def _run_one(args):
         value = getattr(args, key)
         params[key] = default if value is None else value
     params["sampling"] = parse_sampling(params["sampling"])
+    uniform = isinstance(params["sampling"], float)
     path, default_folder = _output_path(args, default_name(params))
-    if args.modes:
+    if args.modes or args.polarizations:
         from pnrotor.waveform import modes
 
-        wave_options = modes.check_arguments(*_modes_options(args))
+        ell_max, order2, distance = modes.check_arguments(*_modes_options(args))
+    if args.polarizations:
+        if not uniform:
+            raise UsageError("--polarizations needs a time step --sampling DT (e.g. 1/4096): h+, hx on a uniform grid")
+        if args.inclination is None or distance is None:
+            raise UsageError("--polarizations needs --inclination (radians) and --distance (Mpc)")
+        line_of_sight = dict(inclination=modes._angle(args.inclination, "--inclination"),
+                             phi_ref=modes._angle(args.phi_ref or 0.0, "--phi-ref"))
 
     from pnrotor.pn.evolve import check_inputs
 
     check_inputs(**params)   # an input error says so at once, before the cold cache's line and compiling
-    _warn_if_cold(modes=args.modes)
-    run = backends.evolve_row(params)
+    _warn_if_cold(modes=args.modes or args.polarizations, streamed=uniform)
+    if uniform:   # computed a block at a time as it is written: the memory of a block, not of the run
+        from pnrotor.waveform.stream import stream
+
+        source = stream(**{key: value for key, value in params.items() if key != "sampling"},
+                        delta_t=params["sampling"])
+        run, samples = source.evolution(), len(source)
+        groups = [("run", run)]
+        if args.modes:
+            groups.append(("modes", source.modes(ell_max, order2 / 2, distance)))
+        if args.polarizations:
+            groups.append(("polarizations", source.polarizations(**line_of_sight, distance=distance, ell_max=ell_max,
+                                                                 amplitude_order=order2 / 2)))
+    else:
+        run = backends.evolve_row(params)
+        samples = len(run)
+        groups = [("run", run)] + ([("modes", modes.modes(run, ell_max, order2 / 2, distance))] if args.modes else [])
     if default_folder:
         path.parent.mkdir(exist_ok=True)
     from pnrotor import hdf5
 
     storage = dict(compression=args.compression, checksum=args.checksum)
-    if args.modes:
-        ell_max, order2, distance = wave_options
-        h = modes.modes(run, ell_max, order2 / 2, distance)
-        with hdf5.batch(path, overwrite=args.overwrite, **storage) as groups:
-            groups.add("run", run)
-            groups.add("modes", h)
+    if len(groups) > 1:
+        with hdf5.batch(path, overwrite=args.overwrite, **storage) as batch:
+            for name, result in groups:
+                batch.add(name, result)
     else:
         hdf5.write(path, run, overwrite=args.overwrite, **storage)
     if not args.quiet:
-        print("\n".join(summary(run, time.perf_counter() - start)))
+        print("\n".join(summary(_ends(run) if uniform else run, time.perf_counter() - start, samples)))
         if args.modes:
             print(f"  modes          l <= {ell_max}, amplitude order {order2 / 2:g}, "
-                  + (f"strain at {distance:g} Mpc" if distance is not None else "r h / M")
-                  + " (groups run and modes)")
+                  + (f"strain at {distance:g} Mpc" if distance is not None else "r h / M"))
+        if args.polarizations:
+            print(f"  polarizations  h+, hx at inclination {line_of_sight['inclination']:g} rad, phi_ref "
+                  f"{line_of_sight['phi_ref']:g} rad, strain at {distance:g} Mpc, from the modes l <= {ell_max} "
+                  f"(amplitude order {order2 / 2:g})")
+        if len(groups) > 1:
+            print(f"  groups         {', '.join(name for name, _ in groups)}")
     print(f"wrote {path}")
     return 0
+
+
+def _ends(streamed):
+    """The first and the last sample of a streamed evolution, as an Evolution of two rows (of one if it has one):
+    what `summary` needs of it (`Evolution.span` reads only those and whether there are two)."""
+    import numpy as np
+
+    n = len(streamed)
+    if n == 1:
+        return streamed.block(0, 1)
+    first, last = streamed.block(0, 1), streamed.block(n - 1, n)
+    rows = {name: np.concatenate((np.asarray(getattr(first, name)), np.asarray(getattr(last, name))))
+            for name in ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat")}
+    return dataclasses.replace(first, **rows)
 
 
 def _modes_options(args):
@@ -249,8 +307,9 @@ def _orbits_text(orbits, exact):
     return f"{orbits:.6g} orbits" if exact else f"~{orbits:.6g} orbits (first to last sample)"
 
 
-def summary(run, wall=None):
-    """The lines `pnrotor evolve` prints about one run."""
+def summary(run, wall=None, samples=None):
+    """The lines `pnrotor evolve` prints about one run (of ``samples`` samples, if given: a run of which only the ends
+    are given)."""
     i, s = run.inputs, run.stats
     M = i["M_seconds"]
     t0, t1, v0, v1, orbits, exact = run.span()
@@ -270,7 +329,7 @@ def summary(run, wall=None):
         f"  backward       {s['termination_backward']}: {s['termination_backward_message']}",
         f"  work           {s['nfev']} evaluations, {s['nsteps']} steps ({s['naccepted']} accepted, "
         f"{s['nrejected']} rejected)",
-        f"  samples        {len(run)} ({_sampling_text(i)})",
+        f"  samples        {len(run) if samples is None else samples} ({_sampling_text(i)})",
         f"  wall time      {s['wall_time_s']:.3g} s evolving"
         + (f", {wall:.3g} s in all (imports and writing included)" if wall is not None else ""),
     ]

@@ -108,6 +108,15 @@ def summary(result):
         ]
     if hasattr(result, "ell_m"):   # waveform modes
         return _modes_summary(result)
+    if hasattr(result, "h_plus"):   # polarizations
+        import numpy as np
+
+        t, hp, hc = result.t_seconds, result.h_plus, result.h_cross
+        if t.size == 0:
+            return ["no samples"]
+        return [f"h+, hx at inclination {result.inclination:g} rad, phi_ref {result.phi_ref:g} rad, strain at "
+                f"{result.distance_Mpc:g} Mpc",
+                f"duration {t[-1] - t[0]:.6g} s, max |h+| {np.abs(hp).max():.4g}, max |hx| {np.abs(hc).max():.4g}"]
     if hasattr(result, "formulation"):
         r = result
         return [

@@ -454,21 +454,29 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
                  precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
                  precession=precession, max_steps=max_steps, lambda1=lambda1, lambda2=lambda2, tidal_order=tidal_order,
                  horizon_absorption=horizon_absorption)
+    res_f, res_b, term_f, stats = integrate(s)
+    inputs = s.inputs()
+    t_out, (v, Phi, x1, x2, R, ellh) = sample(s, res_f, res_b)
+    stats["wall_time_s"] = time.perf_counter() - wall0
+    return Evolution(t=np.asarray(t_out, dtype=np.float64), t_seconds=np.asarray(t_out) * s.M_sec, v=v, Phi=Phi,
+                     chi1=x1, chi2=x2, R=R, ell_hat=ellh, termination=term_f, stats=stats, inputs=inputs)
+
+
+def integrate(s):
+    """Stages 2 and 3 of the run with settings ``s`` (the output kernel of its sampling compiled first, see
+    :func:`pnrotor.pn.sampling.compile_output_kernel`): (forward result, backward result or None, the forward
+    termination, :class:`Evolution` stats but ``wall_time_s``)."""
     system = build_system(s)
     compile_output_kernel(s)
-    inputs = s.inputs()
     dense = s.sampling in ("dt", "per_orbit")
     t_eval = "final" if s.sampling == "final" else None
     t_int = time.perf_counter()
     res_f, term_f = integrate_half(s, system, True, t_eval, dense)
     res_b, term_b = (None, "not_integrated") if s.v_min is None else integrate_half(s, system, False, t_eval, dense)
     t_int = time.perf_counter() - t_int
-    t_out, (v, Phi, x1, x2, R, ellh) = sample(s, res_f, res_b)
     stats = _stats(res_f, res_b, term_f, term_b)
     stats["wall_time_integrate_s"] = t_int
-    stats["wall_time_s"] = time.perf_counter() - wall0
-    return Evolution(t=np.asarray(t_out, dtype=np.float64), t_seconds=np.asarray(t_out) * s.M_sec, v=v, Phi=Phi,
-                     chi1=x1, chi2=x2, R=R, ell_hat=ellh, termination=term_f, stats=stats, inputs=inputs)
+    return res_f, res_b, term_f, stats
 
 
 def check_inputs(m1, m2, chi1, chi2, f_ref, **options):

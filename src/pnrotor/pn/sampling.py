@@ -280,9 +280,12 @@ def _check_memory(n, s):
     free = available_memory()
     if not need < free:
         what = f"{s.sampling_value!r} s" if s.sampling == "dt" else f"('per_orbit', {s.sampling_value!r})"
+        stream = (", or write the history to a file block by block: pnrotor.hdf5.write(path, pnrotor.stream(m1, m2, "
+                  "chi1, chi2, f_ref, delta_t=...).evolution()) (pnrotor evolve --sampling DT writes that way)"
+                  if s.sampling == "dt" else "")
         raise ValueError(f"sampling = {what} would need {n:.4g} samples ({need / 2 ** 30:.3g} GiB), more than the "
                          f"{free / 2 ** 30:.3g} GiB of memory available now; choose a coarser sampling or a "
-                         f"shorter span (f_min, f_max)")
+                         f"shorter span (f_min, f_max){stream}")
 
 
 def _allocate_history(n, mode=MODE_COPRECESSING):
@@ -380,9 +383,8 @@ def _sample_steps(sampling, mode, fixed, res_f, res_b):
     return t_out, _constant_rows(hist, mode, fixed, t_out.size)
 
 
-def _uniform_times(dt, t_forward, t_backward):
-    """(t = kΔt for every k within the integrated span [t_backward or 0, t_forward], ascending; how many are before
-    t = 0)."""
+def uniform_range(dt, t_forward, t_backward):
+    """(k_lo, k_hi): the first and last k with t = kΔt within the integrated span [t_backward or 0, t_forward]."""
     k_hi = math.floor(t_forward / dt * (1.0 + 1e-15))
     while k_hi * dt > t_forward:
         k_hi -= 1
@@ -391,6 +393,13 @@ def _uniform_times(dt, t_forward, t_backward):
         k_lo = math.ceil(t_backward / dt * (1.0 + 1e-15))
         while k_lo * dt < t_backward:
             k_lo += 1
+    return k_lo, k_hi
+
+
+def _uniform_times(dt, t_forward, t_backward):
+    """(t = kΔt for every k within the integrated span [t_backward or 0, t_forward], ascending; how many are before
+    t = 0)."""
+    k_lo, k_hi = uniform_range(dt, t_forward, t_backward)
     t_out = np.arange(k_lo, k_hi + 1, dtype=np.float64)
     t_out *= dt                                   # one allocation: t = k Δt, ascending
     return t_out, -k_lo

@@ -12,7 +12,8 @@ term), S_ℓm in row ℓ + m and A_ℓm in row ℓ − m, which then become H_�
 evaluated for a mode, an order or a spin quantity nobody asked for (none for a nonspinning run), and spins
 that are the same at every sample (aligned ones) are folded into the coefficients.
 
-:func:`_sum` runs over blocks of samples (``wigner._CHUNK``) with the samples innermost: per block v^k, ln v
+:func:`_sum` runs over blocks of samples (``wigner._CHUNK``) with the samples innermost (the block functions
+:func:`_block_start` and :func:`_block_ell`, which :mod:`pnrotor.waveform.stream` calls too): per block v^k, ln v
 (only if a term needs it) and the spin quantities — for a precessing run of spins taken from the inertial
 frame into each sample's orbital frame, χ' = R⁻¹ χ R — then per ℓ the amplitudes and, without writing them
 out, the rotation to the inertial frame: H itself (co-orbital), H_ℓm e^{−imΦ} (a nonprecessing run in its
@@ -261,8 +262,58 @@ def _mirror(X, rp, rn, n, e_re, e_im, m, sig, fold, nb):
             X[rp, s], X[n + rp, s], X[rn, s], X[n + rn, s] = hr, hi, nr, ni
 
 
+@njit(cache=True)
+def _workspace(ell_max, k, B):
+    """The block arrays of :func:`_block_start` and :func:`_block_ell` for ℓ ≤ ell_max and blocks of B samples, as
+    one tuple: p (the powers of v up to the highest k of a term), Q (its row 0 and, for the spins of a constant
+    run, every row = 1), chi, X, the rotation's (:func:`pnrotor.waveform.wigner._rotation_scratch`) and the unit
+    phases one_re, one_im."""
+    p = np.empty((1 + (k.max() if k.size else 0), B))
+    rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = _rotation_scratch(ell_max, B)
+    return (p, np.ones((N_Q, B)), np.empty((6, B)), np.empty((2 * (2 * ell_max + 1), B)), rq, eb_re, eb_im, ea_re,
+            ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im, np.ones((ell_max + 1, B)), np.zeros((ell_max + 1, B)))
+
+
+@njit(cache=True)
+def _block_start(w, xs, cs, v, chi1, chi2, R, F, spins, frame, h0, logs, quadratic, X1, X2, kappa1, kappa2, i0, nb):
+    """What the ℓ of the samples i0 … i0+nb−1 share, into workspace ``w`` (:func:`_workspace`): the powers of v and
+    the spin quantities (:func:`_sample_block`, the spins taken into the frames of the rotors R; xs, cs its (3,)
+    scratch) and the phases of ``frame`` for the rotors F (R, or R seen from another fixed frame): for "rotors" (2)
+    those of 𝔇(F) (:func:`pnrotor.waveform.wigner._rotor_block`), for "z" (1) e^{−imΦ}."""
+    p, Q, chi, X, rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im, one_re, one_im = w
+    _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, quadratic, X1, X2, kappa1, kappa2, p, Q, chi, xs, cs)
+    if frame == 2:
+        _rotor_block(F, i0, nb, rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
+    elif frame == 1:   # e^{−imΦ}: e^{−iΦ} = (w − iz)² / (w² + z²) for R = exp(Φẑ/2) = (w, 0, 0, z)
+        _rotor_rows(F, i0, nb, rq)
+        for s in range(nb):
+            a, z = rq[0, s], rq[3, s]
+            n2 = a * a + z * z
+            eg_re[1, s], eg_im[1, s] = (a * a - z * z) / n2, -2.0 * a * z / n2
+        _phase_powers(eg_re, eg_im, nb)
+
+
+@njit(cache=True)
+def _block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb):
+    """The modes ℓ of the block :func:`_block_start` prepared, but their last phases: (o_re, o_im, e_re, e_im) with
+    h_ℓm = e_{|m|} o_{ℓ+m} for m ≥ 0 and e*_{|m|} o_{ℓ+m} for m < 0 (what :func:`pnrotor.waveform.wigner._store`
+    applies): the amplitudes with the phases of ``frame`` (:func:`_ell_amplitudes`) and, for "rotors", rotated
+    (:func:`pnrotor.waveform.wigner._rotate_ell`)."""
+    p, Q, chi, X, rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im, one_re, one_im = w
+    n = X.shape[0] // 2
+    H_re, H_im = X[:n], X[n:]
+    # the phases of the amplitudes ((i e^{−iγ})^m', e^{−imΦ} or 1) and of the stored modes ((−i e^{−iα})^m or 1)
+    in_re, in_im, out_re, out_im = (eg_re, eg_im, ea_re, ea_im) if frame == 2 else (
+        (eg_re, eg_im, one_re, one_im) if frame == 1 else (one_re, one_im, one_re, one_im))
+    _ell_amplitudes(ell, ell_start[ell], ell_start[ell + 1], target, k, q, c, p, Q, in_re, in_im, frame == 2, X, nb)
+    if frame == 2:
+        _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, H_re, H_im, y_re, y_im, h_re, h_im, nb)
+        return h_re, h_im, out_re, out_im
+    return H_re, H_im, out_re, out_im
+
+
 @njit(cache=True, nogil=True)
-def _sum(v, chi1, chi2, R, spins, frame, h0, scale, logs, X1, X2, kappa1, kappa2, ell_max, ell_start, target, k, q,
+def _sum(v, chi1, chi2, R, spins, frame, scale, h0, logs, X1, X2, kappa1, kappa2, ell_max, ell_start, target, k, q,
          c, first, rows, coefs, out, lo, hi):
     """out, a float view (n_modes, 2N) of complex (n_modes, N), = the modes of the samples lo … hi−1 in frame
     ``frame`` (:data:`_FRAME_CODES`), a block of samples at a time (lo a multiple of _CHUNK gives the blocks of the
@@ -270,40 +321,18 @@ def _sum(v, chi1, chi2, R, spins, frame, h0, scale, logs, X1, X2, kappa1, kappa2
     docstring; the other arguments are :func:`_sample_block`'s, :func:`_real_terms`' and
     :func:`pnrotor.waveform.wigner.rotation_plan`'s)."""
     B = _CHUNK
-    n = 2 * ell_max + 1
-    p = np.empty((1 + (k.max() if k.size else 0), B))   # the powers of v up to the highest of a term
-    Q, chi, xs, cs = np.ones((N_Q, B)), np.empty((6, B)), np.empty(3), np.empty(3)
+    w = _workspace(ell_max, k, B)
+    xs, cs = np.empty(3), np.empty(3)
     quadratic = np.any(q >= _Q_P)
-    X = np.empty((2 * n, B))
-    rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = _rotation_scratch(ell_max, B)
-    one_re, one_im = np.ones((ell_max + 1, B)), np.zeros((ell_max + 1, B))
-    H_re, H_im = X[:n], X[n:]
-    # the phases of the amplitudes ((i e^{−iγ})^m', e^{−imΦ} or 1) and of the stored modes ((−i e^{−iα})^m or 1)
-    in_re, in_im, out_re, out_im = (eg_re, eg_im, ea_re, ea_im) if frame == 2 else (
-        (eg_re, eg_im, one_re, one_im) if frame == 1 else (one_re, one_im, one_re, one_im))
     for i0 in range(lo, hi, B):
         nb = min(B, hi - i0)
-        _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, quadratic, X1, X2, kappa1, kappa2, p, Q, chi, xs,
-                      cs)
-        if frame == 2:
-            _rotor_block(R, i0, nb, rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
-        elif frame == 1:   # e^{−imΦ}: e^{−iΦ} = (w − iz)² / (w² + z²) for R = exp(Φẑ/2) = (w, 0, 0, z)
-            _rotor_rows(R, i0, nb, rq)
-            for s in range(nb):
-                w, z = rq[0, s], rq[3, s]
-                n2 = w * w + z * z
-                eg_re[1, s], eg_im[1, s] = (w * w - z * z) / n2, -2.0 * w * z / n2
-            _phase_powers(eg_re, eg_im, nb)
+        _block_start(w, xs, cs, v, chi1, chi2, R, R, spins, frame, h0, logs, quadratic, X1, X2, kappa1, kappa2, i0,
+                     nb)
         for ell in range(2, ell_max + 1):
-            _ell_amplitudes(ell, ell_start[ell], ell_start[ell + 1], target, k, q, c, p, Q, in_re, in_im, frame == 2,
-                            X, nb)
-            o_re, o_im = H_re, H_im
-            if frame == 2:
-                _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, H_re, H_im, y_re, y_im, h_re, h_im, nb)
-                o_re, o_im = h_re, h_im
+            o_re, o_im, e_re, e_im = _block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb)
             first_row = mode_index(ell, -ell)
             for r in range(2 * ell + 1):
-                _store(o_re, o_im, r, out_re, out_im, abs(r - ell), r < ell, scale, out, first_row + r, i0, nb)
+                _store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, out, first_row + r, i0, nb)
 
 
 def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None, frame="coorbital",
@@ -320,28 +349,39 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
         from pnrotor import numba_cache
 
         numba_cache.wait_for_aside("modes")
-    M = m1 + m2
-    X1, X2 = m1 / M, m2 / M
-    nu, delta = X1 * X2, X1 - X2
     v = np.ascontiguousarray(v, dtype=np.float64)
     empty = np.zeros((0, 3))
     constant = chi1 is not None and np.ndim(chi1) == 1
     spins = 0 if chi1 is None or constant else (2 if R is not None else 1)
-    constants = None
-    if constant:
-        Q = np.ones((N_Q, 1))
-        _spin_block(np.concatenate((chi1, chi2)).astype(np.float64).reshape(6, 1), 1, X1, X2, float(kappa1),
-                    float(kappa2), True, Q)
-        constants = tuple(Q[:, 0].tolist())
-    ell_start, target, k, q, c, plan = _real_terms(nu, delta, int(ell_max), int(order2), chi1 is not None,
-                                                   constants, tuple(tides), bool(memory))
+    terms = kernel_terms(m1, m2, ell_max, order2, kappa1, kappa2, chi1 is not None, (chi1, chi2) if constant else None,
+                         tides, memory)
     chi1, chi2 = (empty, empty) if not spins else (np.ascontiguousarray(x, dtype=np.float64) for x in (chi1, chi2))
     R = np.zeros((0, 4)) if R is None else np.ascontiguousarray(R, dtype=np.float64)
     out = np.empty((n_modes(ell_max), v.size), dtype=np.complex128)
-    args = (v, chi1, chi2, R, spins, _FRAME_CODES[frame], H0 * nu, float(scale), bool(np.any(q == _Q_LOG)), X1, X2,
-            float(kappa1), float(kappa2), int(ell_max), ell_start, target, k, q, c, *plan, out.view(np.float64))
+    args = (v, chi1, chi2, R, spins, _FRAME_CODES[frame], float(scale), *terms, out.view(np.float64))
     threads.run(lambda lo, hi: _sum(*args, lo, hi), threads.parts(v.size, wigner.MIN_PART, _CHUNK))
     return out
+
+
+def kernel_terms(m1, m2, ell_max, order2, kappa1, kappa2, spinning, constant=None, tides=NO_TIDES, memory=False):
+    """What the amplitude kernels take of a run besides its samples, frame and scale: (h₀/v², whether a term needs
+    ln v, X₁, X₂, κ₁, κ₂, ell_max, then :func:`_real_terms`' ell_start, target, k, q, c and its rotation plan) for
+    masses m1, m2 (any unit), ℓ ≤ ell_max, amplitude order order2/2, with spin terms if ``spinning``; ``constant``:
+    the spins (χ₁, χ₂) along (n̂, λ̂, ℓ̂) if they are the same at every sample (folded into the coefficients), else
+    None (given per sample)."""
+    M = m1 + m2
+    X1, X2 = m1 / M, m2 / M
+    nu, delta = X1 * X2, X1 - X2
+    constants = None
+    if constant is not None:
+        Q = np.ones((N_Q, 1))
+        _spin_block(np.concatenate(constant).astype(np.float64).reshape(6, 1), 1, X1, X2, float(kappa1),
+                    float(kappa2), True, Q)
+        constants = tuple(Q[:, 0].tolist())
+    ell_start, target, k, q, c, plan = _real_terms(nu, delta, int(ell_max), int(order2), bool(spinning), constants,
+                                                   tuple(tides), bool(memory))
+    return (H0 * nu, bool(np.any(q == _Q_LOG)), X1, X2, float(kappa1), float(kappa2), int(ell_max), ell_start, target,
+            k, q, c, *plan)
 
 
 def compile_kernels():

@@ -172,17 +172,21 @@ def check_arguments(ell_max, amplitude_order, distance=None):
     return int(ell_max), int(order2), None if distance is None else _megaparsecs(distance)
 
 
-def _check_memory(count, samples, what):
-    """A ValueError naming ell_max and sampling if ``count`` modes of ``samples`` samples (complex128) would not fit in
-    the memory available (:func:`pnrotor.pn.sampling.available_memory`), before they are allocated."""
+def _check_memory(count, samples, what, streamed=False):
+    """A ValueError naming ell_max and sampling (and with ``streamed``, the streaming write) if ``count`` modes of
+    ``samples`` samples (complex128) would not fit in the memory available
+    (:func:`pnrotor.pn.sampling.available_memory`), before they are allocated."""
     need, free = 16 * count * samples, _sampling.available_memory()
     if not need < free:
+        stream = (", or write them to a file block by block from the binary's parameters: pnrotor.hdf5.write(path, "
+                  "pnrotor.stream(m1, m2, chi1, chi2, f_ref, delta_t=...).modes(...)) (pnrotor evolve --modes "
+                  "--sampling DT writes that way)") if streamed else ""
         raise ValueError(f"{what}: {count} modes of {samples} samples would need {need / 2 ** 30:.3g} GiB, more than the "
                          f"{free / 2 ** 30:.3g} GiB of memory available now; choose a smaller ell_max or a coarser "
-                         f"sampling")
+                         f"sampling{stream}")
 
 
-def _tides(inputs, tidal_order):
+def tides_of(inputs, tidal_order):
     """``tides`` of :func:`pnrotor.waveform.amplitudes.modes_in_frame` for a run's inputs: (Λ₁, Λ₂, the largest
     power of v of a tidal term), to ``tidal_order`` (None: the run's own; 0, 5 or 6), none without deformabilities
     (or in a file written before them)."""
@@ -193,51 +197,81 @@ def _tides(inputs, tidal_order):
     return (*lambdas, int(2 * order)) if order and any(lambdas) else (0.0, 0.0, -1)
 
 
-def _inertial(evolution, ell_max, order2, scale, tides, memory):
-    """h = 𝔇(R) H times ``scale``, in one pass of the amplitude kernel.  For a nonprecessing run the spins are
-    constant along ℓ̂ (folded into the coefficients) and R = R₀ exp(Φẑ/2) with R₀ the initial frame, so in the
-    default frame (R₀ = 1) h = H e^{−imΦ} (frame "z")."""
-    from pnrotor.pn.initial import frame_rotor
+def check_memory_flag(memory):
+    """``memory`` of :func:`modes` as a bool, or a ValueError naming it."""
+    if not isinstance(memory, (bool, np.bool_)):
+        raise ValueError(f"memory must be True or False, got {memory!r}")
+    return bool(memory)
 
+
+def wave_inputs(tides, memory):
+    """The entries a Modes' inputs gain for ``tides`` (:func:`tides_of`) and ``memory``."""
+    return {**({"tidal_amplitude_order": tides[2] / 2} if tides[2] > 0 else {}), **({"memory": True} if memory else {})}
+
+
+def _inertial(evolution, ell_max, order2, scale, tides, memory):
+    """h = 𝔇(R) H times ``scale``, in one pass of the amplitude kernel (spins and frame: :func:`spins_and_frame`;
+    ``tides``, ``memory``: :func:`~pnrotor.waveform.amplitudes.modes_in_frame`'s)."""
     inputs = evolution.inputs
-    chi1 = chi2 = None
-    frame = "rotors"
     if inputs["state"] == "precessing":   # spins taken into the orbital frame inside the kernel
-        chi1, chi2 = evolution.chi1, evolution.chi2
+        chi1, chi2, frame = evolution.chi1, evolution.chi2, "rotors"
     else:
-        if inputs["spin_content"] == "aligned":
-            chi1, chi2 = (np.array([0.0, 0.0, np.dot(chi[0], evolution.ell_hat[0])])
-                          for chi in (evolution.chi1, evolution.chi2))
-        R0 = frame_rotor(np.asarray(inputs["ell_hat"]), np.asarray(inputs["n_hat"]))
-        if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]):
-            frame = "z"
+        chi1, chi2, frame = spins_and_frame(inputs, evolution.chi1[0], evolution.chi2[0], evolution.ell_hat[0])
     return modes_in_frame(evolution.v, chi1, chi2, inputs["m1_Msun"], inputs["m2_Msun"], ell_max, order2,
                           inputs["kappa1"], inputs["kappa2"], R=evolution.R, frame=frame, scale=scale, tides=tides,
                           memory=memory)
 
 
-def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None, tidal_order=None, memory=False):
-    """Inertial-frame modes h_ℓm of ``evolution`` (module docstring) for ℓ ≤ ``ell_max`` (2 … 8) with
-    amplitude terms through ``amplitude_order`` (0 … 4 in steps of 0.5; the 4PN term is (2,2)'s), as strain at ``distance``
-    (Mpc or an astropy length) or, without one, as r h / M.  For a run with tidal deformabilities, the tidal
-    amplitude terms (:mod:`pnrotor.waveform.tidal`) to ``tidal_order`` (0: none, 5 or 6; None: the run's
-    tidal order).  ``memory=True`` adds the nonlinear memory to the m = 0 modes (Favata 2009's closed form to
-    the amplitude order, at most 3PN: :mod:`pnrotor.waveform.memory`, which states its convention for the
-    start of the run: the memory accumulated since t → −∞).  Returns :class:`Modes`."""
-    if not isinstance(evolution, Evolution):
-        raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads), got "
-                        f"{type(evolution).__name__}")
+def spins_and_frame(inputs, chi1, chi2, ell_hat):
+    """(χ₁, χ₂, frame) of the amplitude kernel for a run on the aligned state (``inputs['state']``), whose spins chi1,
+    chi2 and ℓ̂ are constant: the spins are None (nonspinning) or their components along ℓ̂, (0, 0, χᵢ·ℓ̂), folded into
+    the coefficients, and R = R₀ exp(Φẑ/2) with R₀ the initial frame, so in the default frame (R₀ = 1) h = H e^{−imΦ}
+    (frame "z"), else "rotors"."""
+    from pnrotor.pn.initial import frame_rotor
+
+    if inputs["spin_content"] == "aligned":
+        chi1, chi2 = (np.array([0.0, 0.0, np.dot(chi, ell_hat)]) for chi in (chi1, chi2))
+    else:
+        chi1 = chi2 = None
+    R0 = frame_rotor(np.asarray(inputs["ell_hat"]), np.asarray(inputs["n_hat"]))
+    return chi1, chi2, "z" if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]) else "rotors"
+
+
+def modes(evolution, *args, **kwargs):
+    """Inertial-frame modes h_ℓm (module docstring) as :class:`Modes`, of a run or of a binary:
+
+    * ``modes(evolution, ell_max=8, amplitude_order=3.5, distance=None, tidal_order=None, memory=False)``: of the
+      samples of ``evolution`` (an :class:`~pnrotor.pn.evolve.Evolution`), for ℓ ≤ ``ell_max`` (2 … 8) with
+      amplitude terms through ``amplitude_order`` (0 … 4 in steps of 0.5; the 4PN term is (2,2)'s), as strain at
+      ``distance`` (Mpc or an astropy length) or, without one, as r h / M.  For a run with tidal deformabilities,
+      the tidal amplitude terms (:mod:`pnrotor.waveform.tidal`) to ``tidal_order`` (0: none, 5 or 6; None: the
+      run's tidal order).  ``memory=True`` adds the nonlinear memory to the m = 0 modes (Favata 2009's closed form
+      to the amplitude order, at most 3PN: :mod:`pnrotor.waveform.memory`, which states its convention for the
+      start of the run: the memory accumulated since t → −∞);
+    * ``modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=8,
+      amplitude_order=3.5, **evolve_options)``: the same of ``pnrotor.evolve(…, sampling=delta_t)``, bitwise,
+      computed from the integrator's dense output without its history (:func:`pnrotor.waveform.stream.modes`)."""
+    if isinstance(evolution, Evolution):
+        return _modes_of_run(evolution, *args, **kwargs)
+    if _real(evolution) or hasattr(evolution, "unit"):   # a mass (a number, or an astropy Quantity)
+        from pnrotor.waveform import stream
+
+        return stream.modes(evolution, *args, **kwargs)
+    raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads) or a "
+                    f"binary's m1, m2, chi1, chi2, f_ref with delta_t=..., got {type(evolution).__name__}")
+
+
+def _modes_of_run(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None, tidal_order=None, memory=False):
+    """:func:`modes` of an Evolution."""
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
-    if not isinstance(memory, (bool, np.bool_)):
-        raise ValueError(f"memory must be True or False, got {memory!r}")
+    memory = check_memory_flag(memory)
+    _check_memory(n_modes(ell_max), len(evolution), "modes()", streamed=True)
     inputs = evolution.inputs
-    tides = _tides(inputs, tidal_order)
-    _check_memory(n_modes(ell_max), len(evolution), "modes()")
+    tides = tides_of(inputs, tidal_order)
     scale = 1.0 if distance_Mpc is None else _scale(None, distance_Mpc, inputs["M_seconds"])
-    h = _inertial(evolution, ell_max, order2, scale, tides, bool(memory))
+    h = _inertial(evolution, ell_max, order2, scale, tides, memory)
     return Modes(t=evolution.t, t_seconds=evolution.t_seconds, ell_max=ell_max, data=h, frame="inertial",
                  R=evolution.R, Phi=evolution.Phi, distance_Mpc=distance_Mpc,
                  inputs=dict(inputs, ell_max=ell_max, amplitude_order=order2 / 2,
                              distance_Mpc=np.nan if distance_Mpc is None else distance_Mpc,
-                             **({"tidal_amplitude_order": tides[2] / 2} if tides[2] > 0 else {}),
-                             **({"memory": True} if memory else {})))
+                             **wave_inputs(tides, memory)))
