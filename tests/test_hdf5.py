@@ -172,8 +172,10 @@ finite = st.floats(allow_nan=False, allow_infinity=False)
 @st.composite
 def histories(draw):
     n = draw(st.integers(0, 40))
-    return FrameHistory(  # t and R finite (what read and write check), the scalars any float
-        t=draw(arrays(np.float64, n, elements=finite)), R=draw(arrays(np.float64, (n, 4), elements=finite)),
+    R = draw(arrays(np.float64, (n, 4), elements=st.floats(-1e150, 1e150)))
+    R[:, 0] = draw(arrays(np.float64, n, elements=st.floats(1e-150, 1e150) | st.floats(-1e150, -1e-150)))
+    return FrameHistory(  # t finite and R rotors (what read and write check), the scalars any float
+        t=draw(arrays(np.float64, n, elements=finite)), R=R,
         formulation=draw(texts),
         method=draw(st.sampled_from(["dop853", "bulirsch_stoer"])), atol=draw(st.floats()), rtol=draw(st.floats()),
         nfev=draw(st.integers(0, 2**62)), nsteps=draw(st.integers(0, 10**9)), naccepted=draw(st.integers(0, 10**9)),

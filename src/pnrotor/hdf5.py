@@ -101,19 +101,22 @@ class Array(NamedTuple):
     """How an array field of a run is stored: its ``shape``, each entry an int, ``"N"`` (the number of samples,
     the same in every array of the run) or a name in `_DIMENSIONS`; its ``units`` attribute; its ``dtype``
     (either byte order; ``"str"``: a numpy object array of `str`, stored as fixed-length UTF-8).  Its values
-    must be finite unless ``finite`` is False (float and complex arrays; NaN then marks an absent value)."""
+    must be finite unless ``finite`` is False (float and complex arrays; NaN then marks an absent value); with
+    ``rotors`` each row along the last axis is a rotor, its squared norm a normal float64 (not zero, nor so small
+    or large that the kernels dividing by it would fail; a row of NaN where NaN is allowed)."""
 
     shape: tuple
     units: str
     dtype: str = "float64"
     finite: bool = True
+    rotors: bool = False
 
 
 _M = "M (G M / c^3, total mass M)"
 _ROTOR = Array(("N", 4), (
     "1; scalar-first unit quaternion (w, x, y, z), sign-continuous in time; "
     "frame vectors are R x R^-1, R y R^-1, R z R^-1 (Boyle 2016, eq:rotor-rotation)"
-))
+), rotors=True)
 ARRAYS = {
     "FrameHistory": {
         "t": Array(("N",), "time unit of the angular velocity (omega in rad per unit)"),
@@ -172,11 +175,19 @@ ARRAYS = {
         "inputs/atol": Array(("N",), "absolute tolerance of the integrator"),
     },
 }
+_POPULATION = ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat", "termination", "message", "nsteps", "nfev")
+ARRAYS["Population"] = {name: ARRAYS["PopulationTable"][name]._replace(
+    shape=("N", "K", *ARRAYS["PopulationTable"][name].shape[1:]), finite=False) for name in _POPULATION}
 """The array fields of each run kind (`Array`): what `write` and `read` check, and their ``units``.  A name
-``GROUP/NAME`` is the array NAME of the run's dict field GROUP (a dataset of that subgroup)."""
+``GROUP/NAME`` is the array NAME of the run's dict field GROUP (a dataset of that subgroup).  `pnrotor.Population`,
+not a kind of file (its file is a ``PopulationTable``), is checked by the same rules when it is built: the
+fields it shares with a ``PopulationTable``, with a second axis K over a list of target frequencies where it has
+one, NaN allowed (an invalid binary)."""
 
-_DIMENSIONS = {"modes": lambda values: (values["ell_max"] + 1) ** 2 - 4}
-"""Named dimensions of `ARRAYS` other than N, from the run's other values (checked first)."""
+_DIMENSIONS = {"modes": lambda values: (values["ell_max"] + 1) ** 2 - 4,
+               "K": lambda values: values["t"].shape[1] if values["t"].ndim == 2 else None}
+"""Named dimensions of `ARRAYS` other than N, from the run's other values (checked first); None: the run has no
+such axis."""
 
 UNITS = {kind: {name: array.units for name, array in arrays.items()} for kind, arrays in ARRAYS.items()}
 """``units`` attribute written on a run's datasets of `ARRAYS`, by kind and field (``GROUP/NAME`` in a subgroup)."""
@@ -429,13 +440,17 @@ def layout_problems(cls, values):
         else:
             problems.append(f"dataset {name!r} is missing" if array is None else
                             f"{_what(array)} {name!r} is {_describe(array)}, expected an array")
-    lengths = {name: array.shape[spec.shape.index("N")] for name, (spec, array) in arrays.items()
-               if "N" in spec.shape and array.ndim == len(spec.shape)}
+    sizes = {dim: size(values) for dim, size in _DIMENSIONS.items()
+             if any(dim in spec.shape for spec, _ in arrays.values())}
+    axes = {name: tuple(d for d in spec.shape if d not in sizes or sizes[d] is not None)
+            for name, (spec, array) in arrays.items()}
+    lengths = {name: array.shape[axes[name].index("N")] for name, (spec, array) in arrays.items()
+               if "N" in axes[name] and array.ndim == len(axes[name])}
     n, count = Counter(lengths.values()).most_common(1)[0] if lengths else (None, 0)
     like = [name for name, length in lengths.items() if length == n]
+    sizes["N"] = n
     for name, (spec, array) in arrays.items():
-        sizes = {"N": n, **{dim: size(values) for dim, size in _DIMENSIONS.items() if dim in spec.shape}}
-        shape = tuple(d if sizes.get(d, d) is None else sizes.get(d, d) for d in spec.shape)
+        shape = tuple(d if sizes.get(d, d) is None else sizes.get(d, d) for d in axes[name])
         if spec.dtype == "str":
             if not _is_strings(array):
                 problems.append(f"dataset {name!r} is {_describe(array)}, expected strings")
@@ -452,11 +467,23 @@ def layout_problems(cls, values):
             at = tuple(bad[0].tolist()) if array.ndim > 1 else int(bad[0, 0])
             problems.append(f"dataset {name!r} has {len(bad)} non-finite value{'s' * (len(bad) > 1)} "
                             f"(NaN or inf), the first at index {at}")
+        elif spec.rotors and array.size:
+            with np.errstate(over="ignore", under="ignore"):
+                norm2 = np.einsum("...i,...i->...", array, array)
+            bad = np.argwhere(~((norm2 >= _TINY) & (norm2 <= _HUGE) | np.isnan(norm2)))
+            if len(bad):
+                at = tuple(bad[0].tolist()) if array.ndim > 2 else int(bad[0, 0])
+                problems.append(f"dataset {name!r} has {len(bad)} row{'s' * (len(bad) > 1)} of zero or extreme norm "
+                                f"(not a rotor: |R|^2 must be a normal float64), the first at index {at}")
     for name, keys in REQUIRED_KEYS.get(kind, {}).items():
         missing = [key for key in keys if key not in values[name]]
         if missing:
             problems.append(f"group {name!r} lacks {', '.join(map(repr, missing))}")
     return problems
+
+
+_TINY, _HUGE = np.finfo(np.float64).tiny, np.finfo(np.float64).max
+"""The range of a rotor's squared norm: the kernels that read rotors divide by it."""
 
 
 def _is_strings(value):
@@ -497,14 +524,24 @@ def _shape(shape):
     return f"({', '.join(map(str, shape))}{',' * (len(shape) == 1)})"
 
 
-def _check_run(run):
-    """Raise `ValueError` unless the run dataclass `run` is one `read` would accept back (`layout_problems`)."""
-    kind = _kind_of(run)
+def check(run, doing="cannot write"):
+    """Raise ``ValueError(f"{doing} this KIND: PROBLEMS")`` unless the result dataclass `run` (a run kind of
+    `KINDS`, or a `pnrotor.Population`) passes `layout_problems`: the one check of a result's invariants (its
+    fields' types, its arrays' shapes, dtypes and finite values, nonzero rotors, the keys of its dicts), which
+    `write` makes before writing (so every file written reads back), `pnrotor.modes` and `Modes`' methods before
+    their compiled kernels read the arrays, and `FrameHistory` and `Population` when they are built."""
     values = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
     values = {name: value for name, value in values.items() if name not in NOT_WRITTEN and not callable(value)}
     problems = layout_problems(type(run), values)
     if problems:
-        raise ValueError(f"cannot write this {kind}: {'; '.join(problems)}")
+        raise ValueError(f"{doing} this {type(run).__name__}: {'; '.join(problems)}")
+
+
+def _check_run(run):
+    """Raise unless the run dataclass `run` is of a kind `write` writes (`TypeError`) and one `read` would accept
+    back (`check`'s `ValueError`)."""
+    kind = _kind_of(run)
+    check(run)
     return kind
 
 

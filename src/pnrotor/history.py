@@ -20,7 +20,8 @@ class FrameHistory:
     ``naccepted``, ``nrejected``, ``n_resets`` generator resets), ``status`` (0 success, see
     `pnrotor.ode`), ``message`` and ``wall_time`` in seconds. ``inputs`` holds any further parameters
     of the run (plain numbers, strings, or float arrays). ``dense``, when requested, is the integrator's
-    dense output of the evolved state (not written to files).
+    dense output of the evolved state (not written to files).  Checked when built (`pnrotor.hdf5.check`: a
+    ValueError naming every problem, as `pnrotor.hdf5.write` would).
     """
 
     t: np.ndarray
@@ -39,3 +40,8 @@ class FrameHistory:
     wall_time: float
     inputs: dict = field(default_factory=dict)
     dense: object = None
+
+    def __post_init__(self):
+        from pnrotor import hdf5
+
+        hdf5.check(self, "cannot build")

@@ -89,6 +89,9 @@ class Population:
     inputs : dict — the options shared by every binary
     stats : dict — ``wall_time_s`` of the call and ``wall_time_integrate_s`` of its compiled loops (the rest is
         Python: checks and parameter vectors)
+
+    Checked when built (:func:`pnrotor.hdf5.check`, by ``pnrotor.hdf5.ARRAYS["Population"]``): a ValueError names
+    every array of the wrong type, dtype or shape and every zero rotor.
     """
 
     t: np.ndarray
@@ -105,6 +108,11 @@ class Population:
     nfev: np.ndarray
     inputs: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        from pnrotor import hdf5
+
+        hdf5.check(self, "cannot build")   # the arrays' shapes, dtypes and rotors, by hdf5.ARRAYS["Population"]
 
     def __len__(self):
         return self.t.shape[0]

@@ -138,11 +138,21 @@ class Modes:
         return q.multiply(self.R, np.column_stack((np.cos(half), np.zeros_like(half), np.zeros_like(half),
                                                    np.sin(half))))
 
+    def _check(self, doing):
+        """A ValueError naming ``doing`` unless these modes are well formed (:func:`pnrotor.hdf5.check`: what
+        ``hdf5.write`` checks) and in one of :data:`FRAMES`, before a compiled kernel reads them."""
+        from pnrotor import hdf5
+
+        hdf5.check(self, doing)
+        if self.frame not in FRAMES:
+            raise ValueError(f"{doing} this Modes: frame {self.frame!r} is not one of {', '.join(FRAMES)}")
+
     def in_frame(self, frame):
         """These modes in another frame (one of :data:`FRAMES`): h' = 𝔇(R'⁻¹ R) h (in their own frame, these
         modes themselves, not a copy)."""
         if frame not in FRAMES:
             raise ValueError(f"frame must be one of {', '.join(FRAMES)}; got {frame!r}")
+        self._check("cannot rotate")
         if frame == self.frame:
             return self
         _check_memory(self.data.shape[0], self.data.shape[1], "rotating them")
@@ -172,6 +182,7 @@ class Modes:
         finite numbers in radians or astropy angles."""
         inclination, phi_ref, psi = (_angle(x, name) for x, name in ((inclination, "inclination"),
                                                                       (phi_ref, "phi_ref"), (psi, "psi")))
+        self._check("cannot compute the polarizations of")
         to_Mpc = self.distance_Mpc if distance is None else _megaparsecs(distance)
         scale = 1.0 if to_Mpc is None else _scale(self.distance_Mpc, to_Mpc, self.inputs["M_seconds"])
         data = self.in_frame("inertial").data
@@ -233,6 +244,9 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
         raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads), got "
                         f"{type(evolution).__name__}")
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
+    from pnrotor import hdf5
+
+    hdf5.check(evolution, "cannot compute the modes of")   # a malformed run would be read out of bounds
     _check_memory(n_modes(ell_max), len(evolution), "modes()")
     inputs = evolution.inputs
     scale = 1.0 if distance_Mpc is None else _scale(None, distance_Mpc, inputs["M_seconds"])
