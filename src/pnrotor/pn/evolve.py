@@ -41,10 +41,12 @@ import functools
 import inspect
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..history import short_repr
 from ..ode import EVENTS_SIG, RHS_SIG, by_address
 from ..ode.dop853 import OUT_FINAL, OUT_STEPS, _controller, _default_hook, _integrate
 from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
@@ -114,6 +116,8 @@ class Evolution:
     termination: str
     stats: dict = field(default_factory=dict)
     inputs: dict = field(default_factory=dict)
+
+    __repr__ = short_repr
 
     @property
     def n_hat(self):
@@ -423,6 +427,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
                  precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
                  precession=precession, max_steps=max_steps)
     system = build_system(s)
+    warn_if_unresolved(s.atol, s.rtol, system.y0)
     compile_output_kernel(s)
     inputs = s.inputs()
     dense = s.sampling in ("dt", "per_orbit")
@@ -437,6 +442,25 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Evolution(t=np.asarray(t_out, dtype=np.float64), t_seconds=np.asarray(t_out) * s.M_sec, v=v, Phi=Phi,
                      chi1=x1, chi2=x2, R=R, ell_hat=ellh, termination=term_f, stats=stats, inputs=inputs)
+
+
+def warn_if_unresolved(atol, rtol, y0):
+    """A warning naming ``atol`` (and True) if the tolerance of a component of the initial state(s) ``y0``,
+    atol + rtol |yᵢ|, is below the float64 resolution of its value, the spacing of float64 numbers there
+    (``np.spacing(|yᵢ|)``: 2.2e-16 for a rotor component of 1, 1.4e-17 for v = 0.094): the rounding of yᵢ in a
+    step then exceeds what the step may err, so the run can be no more accurate than at that bound, and its steps
+    shrink towards the rounding noise, down to max_steps.  A warning, not an error: such a run is well defined and
+    often ends as asked, and a tiny atol is how a run is driven to a step underflow on purpose."""
+    y = np.abs(y0)
+    need = np.spacing(y) - rtol * y
+    if not (atol >= need).all():
+        bound = float(need.max())
+        warnings.warn(f"atol = {float(atol)!r} is below the float64 resolution of the state: with rtol = "
+                      f"{float(rtol)!r} the tolerance must be at least {bound:.3g} (the spacing of float64 numbers "
+                      f"at the initial state's values) to be met; this run can be no more accurate than at atol = "
+                      f"{bound:.3g}, and its steps may shrink until max_steps ends it", stacklevel=3)
+        return True
+    return False
 
 
 def check_inputs(m1, m2, chi1, chi2, f_ref, **options):

@@ -45,13 +45,14 @@ import numpy as np
 from numba import njit
 
 from .. import numba_cache, threads
+from ..history import short_repr
 from ..ode.dop853 import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
                           STATUS_EVENT, _crossed, _default_hook, _dop853_core, _events_function, _function_addresses,
                           _locate_root)
 from ..ode.result import contd8
 from . import initial as _ini
 from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _ended_at, _tolerances, build_rows, end_name,
-                     half, kmax_of, population_parts, termination)
+                     half, kmax_of, population_parts, termination, warn_if_unresolved)
 from .sampling import _fill_history, output_mode
 from .settings import Binaries, binary_settings, options, population_settings, target_v
 from .system import EV_V_END, N_EVENTS, P_VEND
@@ -108,6 +109,8 @@ class Population:
     nfev: np.ndarray
     inputs: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
+
+    __repr__ = short_repr
 
     def __post_init__(self):
         from pnrotor import hdf5
@@ -203,7 +206,13 @@ def _per_binary(x, n, name, shape=(), unit=None):
 def _numbers(x, name, shape, unit=None):
     """x as a float64 array, or a ValueError naming it and the ``shape`` expected: booleans are refused, as
     ``evolve`` refuses them, and so are text, complex numbers and ragged sequences; an astropy Quantity is
-    converted to ``unit`` (M_sun, Hz), or refused where there is none."""
+    converted to ``unit`` (M_sun, Hz), or refused where there is none; so is a numpy masked array with masked
+    entries (numpy would compute its hidden values)."""
+    if np.ma.is_masked(x):
+        count = np.ma.count_masked(x)
+        raise ValueError(f"{name} has {count} masked entr{'ies' if count > 1 else 'y'} (a numpy masked array): "
+                         f"evolve_many would compute the values hidden under the mask; drop those binaries or fill "
+                         f"them (x.filled(...))")
     x = _ini.in_unit(x, unit, name, "numbers" if unit is None else f"numbers (in {unit})")
     try:
         if _has_bool_or_text(x) or np.iscomplexobj(x):
@@ -437,7 +446,7 @@ integrate_rotor, precession, max_steps
                             k2l[i]) not in (None, str(e)):
                 out.message[i * K + k] = why
 
-    integrating = 0.0
+    integrating, unresolved = 0.0, False
     with _collector_paused():
         for start in range(0, n, CHUNK):
             stop = min(start + CHUNK, n)
@@ -474,6 +483,7 @@ integrate_rotor, precession, max_steps
                     continue
                 bg = Binaries(*(x[g] for x in b))
                 rhs, events, P, Y0, bases, checks = build_rows(opts, bg, parts, g)
+                unresolved = unresolved or warn_if_unresolved(opts.atol, opts.rtol, Y0)   # once per call
                 keep = np.ones(g.size, dtype=bool)
                 for q, c in enumerate(checks.tolist()):
                     if _ended_at(*c[:4]) or c[4]:

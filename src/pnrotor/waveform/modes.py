@@ -28,11 +28,13 @@ quadrupole formula (tests/test_waveform_modes.py).
 import functools
 import math
 import sys
+import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from pnrotor import quaternion as q
+from pnrotor.history import short_repr
 from pnrotor.pn import sampling as _sampling
 from pnrotor.pn.evolve import Evolution
 from pnrotor.pn.initial import _integer, _real
@@ -42,7 +44,7 @@ from pnrotor.waveform.layout import ell_m as _ell_m
 from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.waveform.wigner import rotate_modes
 
-__all__ = ["Modes", "modes", "check_arguments", "FRAMES"]
+__all__ = ["Modes", "modes", "check_arguments", "FRAMES", "CoarseSamplingWarning"]
 
 FRAMES = ("inertial", "coprecessing", "coorbital")
 ELL_MAX = 8
@@ -56,27 +58,61 @@ def _megaparsecs(distance):
 
 
 def _angle(value, name):
-    """Radians from a finite real number (radians) or an astropy angle; ValueError naming ``name``."""
+    """Radians from a finite real number in [−2π, 2π] (radians) or an astropy angle (any value); ValueError naming
+    ``name``: a number beyond 2π is most likely in degrees."""
     u = sys.modules.get("astropy.units")   # a Quantity exists only if its module was imported
     if u is not None and isinstance(value, u.Quantity):
         if value.unit.physical_type != "angle":
             raise ValueError(f"{name} must be an angle (radians, or an astropy angle); got {value!r}")
         value = value.to_value(u.rad)
+    elif _real(value) and math.isfinite(value) and not -2.0 * math.pi <= value <= 2.0 * math.pi:
+        raise ValueError(f"{name} = {value!r} is outside [-2 pi, 2 pi]: angles are in radians ({value!r} degrees is "
+                         f"{math.radians(value):.6g} rad; or pass an astropy angle, such as {value!r} * u.deg)")
     if not (_real(value) and math.isfinite(value)):
         raise ValueError(f"{name} must be a finite angle in radians (a number, or an astropy angle); got {value!r}")
     return float(value)
 
 
+_SCALES = (2.0 ** -511, 2.0 ** 511)
+"""The factors a distance may scale modes by: those whose squares (as in |h|², a power or a matched filter) are
+normal float64 numbers, as far from underflow as from overflow."""
+
+
 def _scale(from_Mpc, to_Mpc, M_seconds):
     """Factor taking modes at distance ``from_Mpc`` (None: r h / M) to strain at ``to_Mpc``; a ValueError naming
-    ``distance`` where it is not a normal float64 (inf, or 0 or subnormal: the modes would be lost)."""
+    ``distance`` where it is outside :data:`_SCALES` (one range, symmetric in the exponent: a distance so small
+    that |h| ~ 1e305 is refused as one so large that h underflows)."""
     metres_per_Mpc, c = _constants()
     source = M_seconds * c if from_Mpc is None else from_Mpc * metres_per_Mpc
     scale = source / (to_Mpc * metres_per_Mpc)
-    if not sys.float_info.min <= scale < math.inf:
-        raise ValueError(f"distance = {to_Mpc!r} Mpc is out of range: it scales these modes by {scale:.3g}, "
-                         f"beyond float64's normal numbers")
+    if not _SCALES[0] <= scale <= _SCALES[1]:
+        raise ValueError(f"distance = {to_Mpc!r} Mpc is out of range: it scales these modes by {scale:.3g}, outside "
+                         f"the {_SCALES[0]:.3g} to {_SCALES[1]:.3g} whose squares are normal float64 numbers")
     return scale
+
+
+class CoarseSamplingWarning(UserWarning):
+    """Modes (or polarizations) of samples too far apart in orbital phase to be a waveform: the run's
+    ``sampling`` (its integrator's steps, by default) is too coarse."""
+
+
+def _warn_if_coarse(Phi, inputs, what):
+    """A :class:`CoarseSamplingWarning` naming ``sampling`` if the orbital phase Φ advances by π/2 or more between
+    two samples somewhere: h₂₂ ∝ e^{−2iΦ} then has at most two samples per cycle (Nyquist's limit, where a
+    sinusoid is no longer determined by its samples), so ``what`` cannot be interpolated or Fourier transformed
+    as a waveform.  A warning rather than an error: the values at the samples are right (and 'steps' is the
+    default sampling, of runs whose modes are asked for their amplitudes' evolution too)."""
+    if np.size(Phi) < 2:
+        return
+    step = float(np.abs(np.diff(Phi)).max())
+    if step >= 0.5 * math.pi:
+        given = inputs.get("sampling", "?")
+        given = {"dt": f"{inputs.get('sampling_value', math.nan):g} s", "per_orbit":
+                 f"'per_orbit:{inputs.get('sampling_value', math.nan):g}'"}.get(given, repr(given))
+        warnings.warn(f"{what} of a run sampled at sampling={given} are coarse: the orbital phase advances by up to "
+                      f"{step:.3g} rad between samples (pi/2 or more: at most two samples per cycle of h22); "
+                      f"for a waveform evolve with a finer sampling, such as sampling=1/4096 or 'per_orbit:16'",
+                      CoarseSamplingWarning, stacklevel=3)
 
 
 @functools.cache
@@ -115,6 +151,8 @@ class Modes:
     Phi: np.ndarray
     distance_Mpc: float = None
     inputs: dict = field(default_factory=dict)
+
+    __repr__ = short_repr
 
     @property
     def ell_m(self):
@@ -183,6 +221,7 @@ class Modes:
         inclination, phi_ref, psi = (_angle(x, name) for x, name in ((inclination, "inclination"),
                                                                       (phi_ref, "phi_ref"), (psi, "psi")))
         self._check("cannot compute the polarizations of")
+        _warn_if_coarse(self.Phi, self.inputs, "polarizations")
         to_Mpc = self.distance_Mpc if distance is None else _megaparsecs(distance)
         scale = 1.0 if to_Mpc is None else _scale(self.distance_Mpc, to_Mpc, self.inputs["M_seconds"])
         data = self.in_frame("inertial").data
@@ -247,6 +286,7 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None):
     from pnrotor import hdf5
 
     hdf5.check(evolution, "cannot compute the modes of")   # a malformed run would be read out of bounds
+    _warn_if_coarse(evolution.Phi, evolution.inputs, "modes")
     _check_memory(n_modes(ell_max), len(evolution), "modes()")
     inputs = evolution.inputs
     scale = 1.0 if distance_Mpc is None else _scale(None, distance_Mpc, inputs["M_seconds"])
