@@ -64,8 +64,10 @@ import numpy as np
 
 from pnrotor import __version__
 
-SCHEMA_VERSION = 1
-"""Integer version of the layout below; `read` refuses files with a newer one."""
+SCHEMA_VERSION = 2
+"""Integer version of the layout below; `read` refuses files with a newer one.  Version 2 stores every string
+attribute as fixed-length UTF-8 (`_string`), version 1 as variable-length strings in HDF5's global heap; both are
+read."""
 
 KINDS = {
     "FrameHistory": "pnrotor.history:FrameHistory",
@@ -273,7 +275,7 @@ def batch(path, *, overwrite=False, compression=None, checksum=True, append=Fals
     existing = None
     if append and path.is_file():
         with _open(path) as f:
-            if f.attrs.get("kind") != BATCH:
+            if _attr(f, "kind") != BATCH:
                 raise ValueError(f"{path} holds a single run, not a batch; add runs to another file")
             existing = set(_runs(f))
     else:
@@ -376,12 +378,14 @@ def read(path, group=None):
     with _open(path) as f:
         g = _run_group(f, path, group)
         where = path if group is None else f"{path} run {group!r}"
-        _check_metadata(g, where)
-        cls = _class_of(g.attrs.get("kind"), where)
-        values = _get(g, skip=_NOT_FIELDS)
+        attributes = _attributes(g)   # each read once: HDF5 attribute reads are most of the time of a small file
+        _check_metadata(attributes, where)
+        cls = _class_of(attributes["kind"], where)
+        values = _get(g, attributes, skip=_NOT_FIELDS)
         problems = layout_problems(cls, values)
-        metadata = {name: _value(g.attrs[name]) for name in _METADATA}
-        if not problems and _STRINGS_CRC in g.attrs and g.attrs[_STRINGS_CRC] != _strings_crc({**metadata, **values}):
+        metadata = {name: _value(attributes[name]) for name in _METADATA}
+        crc = attributes.get(_STRINGS_CRC)
+        if not problems and crc is not None and crc != _strings_crc({**metadata, **values}):
             problems.append("its string attributes are damaged (their CRC-32 is not the one written with them)")
         if problems:
             raise ValueError(f"{where}: {'; '.join(problems)}")
@@ -392,9 +396,9 @@ def metadata(path, group=None):
     """The metadata attributes of a run: ``kind``, ``pnrotor_schema``, ``pnrotor_version``, ``created``
     (checked: all four present, the schema version one this pnrotor reads, the others strings)."""
     with _open(path) as f:
-        g = _run_group(f, path, group)
-        _check_metadata(g, path if group is None else f"{path} run {group!r}")
-        return {name: _value(g.attrs[name]) for name in _METADATA}
+        attributes = _attributes(_run_group(f, path, group))
+        _check_metadata(attributes, path if group is None else f"{path} run {group!r}")
+        return {name: _value(attributes[name]) for name in _METADATA}
 
 
 def list_runs(path):
@@ -545,13 +549,13 @@ def _check_run(run):
     return kind
 
 
-def _check_metadata(g, where):
-    """Raise `ValueError` unless group `g` has the four metadata attributes, ``kind``, ``pnrotor_version``
-    and ``created`` strings (the schema version is checked on opening)."""
-    missing = [name for name in _METADATA if name not in g.attrs]
-    wrong = [name for name in ("kind", "pnrotor_version", "created") if name in g.attrs
-             and not isinstance(g.attrs[name], str)]
-    if _STRINGS_CRC in g.attrs and not isinstance(g.attrs[_STRINGS_CRC], np.integer):
+def _check_metadata(attributes, where):
+    """Raise `ValueError` unless the attributes of a run group (`_attributes`) hold the four metadata attributes,
+    ``kind``, ``pnrotor_version`` and ``created`` strings (the schema version is checked on opening)."""
+    missing = [name for name in _METADATA if name not in attributes]
+    wrong = [name for name in ("kind", "pnrotor_version", "created") if name in attributes
+             and not isinstance(attributes[name], str)]
+    if _STRINGS_CRC in attributes and not isinstance(attributes[_STRINGS_CRC], np.integer):
         wrong.append(_STRINGS_CRC)
     if missing or wrong:
         raise ValueError(f"{where}: " + "; ".join([f"attribute {name!r} is missing" for name in missing]
@@ -818,7 +822,7 @@ def _put_metadata(g, kind):
     metadata = {"kind": kind, "pnrotor_schema": SCHEMA_VERSION, "pnrotor_version": __version__,
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     for name, value in metadata.items():
-        g.attrs[name] = value
+        g.attrs[name] = _string(value) if isinstance(value, str) else value
     return metadata
 
 
@@ -835,7 +839,7 @@ def _put_fields(g, run, units, storage):
         _put(g, field.name, value, storage, f"{cls.__name__}.{field.name}")
     for name, text in units.items():
         if isinstance(g.get(name), h5py.Dataset):
-            g[name].attrs["units"] = text
+            g[name].attrs["units"] = _string(text)
 
 
 def _put(g, name, value, storage, where):
@@ -859,14 +863,28 @@ def _put(g, name, value, storage, where):
             raise TypeError(f"{where}: only numeric arrays and flat lists/tuples of numbers can be written")
         dataset = _dataset(g, name, array, *storage)
         if not isinstance(value, np.ndarray):
-            dataset.attrs["sequence"] = type(value).__name__
+            dataset.attrs["sequence"] = _string(type(value).__name__)
+    elif isinstance(value, (bytes, np.bytes_)):
+        raise TypeError(f"{where}: cannot write bytes; give text as a str")
     elif value is None or isinstance(value, (str, bool, int, float, complex, np.generic)):
         try:
-            g.attrs[name] = h5py.Empty("f8") if value is None else value
+            g.attrs[name] = h5py.Empty("f8") if value is None else _string(value) if isinstance(value, str) \
+                else value
         except (TypeError, ValueError) as error:
             raise ValueError(f"cannot write {where} = {value!r}: {error}") from None
     else:
         raise TypeError(f"{where}: cannot write a {type(value).__name__}")
+
+
+def _string(text):
+    """The string `text` as an attribute's value: fixed-length UTF-8, NUL-padded (so a string may not hold a NUL;
+    the empty string is one NUL).  It lives in its object's header, which the 1.10 format checksums: a
+    variable-length string would live in HDF5's global heap, which has no checksum, and damage there made HDF5's
+    reader loop forever (schema 1; docs/hdf5-schema.md)."""
+    encoded = text.encode("utf-8", "surrogatepass")
+    if b"\0" in encoded:
+        raise ValueError("a string attribute may not contain NUL characters")
+    return np.array(encoded, dtype=h5py.string_dtype("utf-8", max(1, len(encoded))))
 
 
 def _utf8(strings, where):
@@ -998,13 +1016,13 @@ def _open(path):
 
 
 def _check_schema(g, path):
-    if not isinstance(g.attrs.get("kind", ""), str):   # compared with strings before the run is read
+    if not isinstance(_attr(g, "kind", ""), str):   # compared with strings before the run is read
         raise ValueError(f"{path}: attribute 'kind' is not a string")
-    schema = g.attrs.get("pnrotor_schema")
+    schema = _attr(g, "pnrotor_schema")
     if schema is None:
         raise ValueError(f"{path} is an HDF5 file but not a pnrotor file (no 'pnrotor_schema' attribute)")
     if not isinstance(schema, np.integer) or not 1 <= schema <= SCHEMA_VERSION:
-        writer = _value(g.attrs.get("pnrotor_version", "an unknown version"))
+        writer = _value(_attr(g, "pnrotor_version", "an unknown version"))
         newer = isinstance(schema, np.integer) and schema > SCHEMA_VERSION
         raise ValueError(
             f"{path} has pnrotor schema version {_value(schema)!r} (written by pnrotor {writer}); "
@@ -1014,18 +1032,20 @@ def _check_schema(g, path):
 
 
 def _runs(f):
-    if f.attrs.get("kind") != BATCH:
+    if _attr(f, "kind") != BATCH:
         return ["/"]
     return sorted(name for name, g in f.items() if isinstance(g, h5py.Group) and "kind" in g.attrs)
 
 
 def _run_group(f, path, group):
+    """The group of the run `group` (None: of a one-run file) of the open file `f`: a `h5py.Group`, the root for
+    a one-run file (whose attributes are read without opening the root again for each, as the file's are)."""
     if group is None:
-        if f.attrs.get("kind") == BATCH:
+        if _attr(f, "kind") == BATCH:
             raise ValueError(f"{path} is a batch file; choose a run with group=NAME (--group NAME) from {_runs(f)}")
-        return f
-    if f.attrs.get("kind") != BATCH:
-        g = f if group == "/" else None
+        return f["/"]
+    if _attr(f, "kind") != BATCH:
+        g = f["/"] if group == "/" else None
     else:  # the one group, not `_runs`, which opens every group
         g = f.get(group) if _valid_name(group) else None
         g = g if isinstance(g, h5py.Group) and "kind" in g.attrs else None
@@ -1053,6 +1073,25 @@ def _defaulted(cls):
     }
 
 
+def _attr(obj, name, default=None):
+    """Attribute `name` of the group or dataset `obj` as h5py reads it, but a fixed-length string (UTF-8, how
+    `write` stores strings since schema 2, `_string`; or ASCII, as h5py writes ``bytes``) as `str`, as h5py gives
+    a variable-length one (schema 1); `default` if there is none."""
+    attributes = obj.attrs
+    return _decoded(attributes, name) if name in attributes else default
+
+
+def _attributes(obj):
+    """All attributes of `obj` as `_attr` gives them, name → value, each read once."""
+    attributes = obj.attrs
+    return {name: _decoded(attributes, name) for name in attributes}
+
+
+def _decoded(attributes, name):
+    value = attributes[name]
+    return value.decode("utf-8", "surrogatepass") if isinstance(value, np.bytes_) else value
+
+
 def _value(attribute):
     """An attribute as the Python value written: None for empty, int/float/bool for numpy scalars."""
     if isinstance(attribute, h5py.Empty):
@@ -1060,8 +1099,10 @@ def _value(attribute):
     return attribute.item() if isinstance(attribute, np.generic) else attribute
 
 
-def _get(g, skip=()):
-    values = {name: _value(attribute) for name, attribute in g.attrs.items() if name not in skip}
+def _get(g, attributes=None, skip=()):
+    """The values stored in group `g` (its `_attributes` if given), but the attributes `skip`: name → value."""
+    attributes = _attributes(g) if attributes is None else attributes
+    values = {name: _value(value) for name, value in attributes.items() if name not in skip}
     for name, item in g.items():
         if isinstance(item, h5py.Group):
             values[name] = _get(item)
@@ -1069,6 +1110,6 @@ def _get(g, skip=()):
             values[name] = item.asstr()[...]
         else:
             array = item[...]
-            sequence = item.attrs.get("sequence")
+            sequence = _attr(item, "sequence")
             values[name] = array if sequence is None else _SEQUENCES[sequence](array.tolist())
     return values
