@@ -8,8 +8,9 @@ every write and read of it:
   float64; chunked with a Fletcher-32 checksum per chunk and optional gzip/lzf compression, or with
   ``checksum=False`` and no compression contiguous, see `write`; an object array of `str` a fixed-length
   UTF-8 dataset, stored the same way, as is a numpy string array, read back as one of `str`), each number,
-  string (numpy's ``np.str_`` too, read back as `str`), bool or ``None`` an
-  attribute, each dict a subgroup holding its items by the same rules, each list or tuple of numbers
+  string (numpy's ``np.str_`` too, read back as `str`; a fixed-length UTF-8 attribute, `_string`, since schema 2:
+  no file holds a variable-length string, which HDF5 would keep in its unchecksummed global heap), bool or
+  ``None`` an attribute, each dict a subgroup holding its items by the same rules, each list or tuple of numbers
   a dataset marked with a ``sequence`` attribute. The ``dense`` field (the integrator's dense output, a
   function rather than data) and other callables are not written. Metadata attributes name the
   dataclass (``kind``), the schema version (``pnrotor_schema``), ``pnrotor_version`` and ``created``.
