@@ -191,6 +191,10 @@ class Modes:
         if frame not in FRAMES:
             raise ValueError(f"frame must be one of {', '.join(FRAMES)}; got {frame!r}")
         self._check("cannot rotate")
+        return self._rotated(frame)
+
+    def _rotated(self, frame):
+        """:meth:`in_frame` of modes already checked."""
         if frame == self.frame:
             return self
         _check_memory(self.data.shape[0], self.data.shape[1], "rotating them")
@@ -224,7 +228,7 @@ class Modes:
         _warn_if_coarse(self.Phi, self.inputs, "polarizations")
         to_Mpc = self.distance_Mpc if distance is None else _megaparsecs(distance)
         scale = 1.0 if to_Mpc is None else _scale(self.distance_Mpc, to_Mpc, self.inputs["M_seconds"])
-        data = self.in_frame("inertial").data
+        data = self._rotated("inertial").data
         hp, hc = _pol.polarizations(data, self.ell_m, inclination, 0.5 * np.pi - phi_ref, psi)
         return scale * hp, scale * hc
 
