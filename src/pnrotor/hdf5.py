@@ -408,7 +408,7 @@ def list_runs(path):
         return _runs(f)
 
 
-def layout_problems(cls, values):
+def layout_problems(cls, values, scan=True):
     """What is wrong with the run `values` (field name → value, as `read` gets them from a file or `write`
     from a dataclass) of the run dataclass `cls`, as a list of sentences (empty: nothing). Checked:
 
@@ -419,7 +419,8 @@ def layout_problems(cls, values):
       not checked;
     * for the kinds in `ARRAYS`, each array's presence (``GROUP/NAME``: in the dict field GROUP), dtype (either
       byte order) and shape, every ``"N"`` the same number of samples (that of most arrays, a tie going to the
-      first), and its values finite (where `Array.finite`);
+      first), and its values finite (where `Array.finite`; with ``scan=False`` only the rotors', each a pass
+      over the array, which a kernel that NaN does not harm need not pay for);
     * for the kinds in `REQUIRED_KEYS`, the keys their dict fields must hold.
     """
     problems, kind = [], cls.__name__
@@ -467,7 +468,7 @@ def layout_problems(cls, values):
             others = f" and {count - 1} other array{'s' * (count > 2)}" if count > 1 else ""
             samples = f" (N = {n} samples, as in {like[0]!r}{others})" if lengths.get(name, n) != n else ""
             problems.append(f"dataset {name!r} has shape {_shape(array.shape)}, expected {_shape(shape)}{samples}")
-        elif spec.finite and array.dtype.kind in "fc" and not np.isfinite(array).all():
+        elif spec.finite and (scan or spec.rotors) and array.dtype.kind in "fc" and not np.isfinite(array).all():
             bad = np.argwhere(~np.isfinite(array))
             at = tuple(bad[0].tolist()) if array.ndim > 1 else int(bad[0, 0])
             problems.append(f"dataset {name!r} has {len(bad)} non-finite value{'s' * (len(bad) > 1)} "
@@ -529,15 +530,16 @@ def _shape(shape):
     return f"({', '.join(map(str, shape))}{',' * (len(shape) == 1)})"
 
 
-def check(run, doing="cannot write"):
+def check(run, doing="cannot write", scan=True):
     """Raise ``ValueError(f"{doing} this KIND: PROBLEMS")`` unless the result dataclass `run` (a run kind of
     `KINDS`, or a `pnrotor.Population`) passes `layout_problems`: the one check of a result's invariants (its
     fields' types, its arrays' shapes, dtypes and finite values, nonzero rotors, the keys of its dicts), which
     `write` makes before writing (so every file written reads back), `pnrotor.modes` and `Modes`' methods before
-    their compiled kernels read the arrays, and `FrameHistory` and `Population` when they are built."""
+    their compiled kernels read the arrays, and `FrameHistory` and `Population` when they are built.  ``scan``
+    as for `layout_problems`."""
     values = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
     values = {name: value for name, value in values.items() if name not in NOT_WRITTEN and not callable(value)}
-    problems = layout_problems(type(run), values)
+    problems = layout_problems(type(run), values, scan)
     if problems:
         raise ValueError(f"{doing} this {type(run).__name__}: {'; '.join(problems)}")
 

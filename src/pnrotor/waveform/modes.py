@@ -178,10 +178,11 @@ class Modes:
 
     def _check(self, doing):
         """A ValueError naming ``doing`` unless these modes are well formed (:func:`pnrotor.hdf5.check`: what
-        ``hdf5.write`` checks) and in one of :data:`FRAMES`, before a compiled kernel reads them."""
+        ``hdf5.write`` checks, but for NaN in ``data``: harmless to the kernels, and a search through the largest
+        array) and in one of :data:`FRAMES`, before a compiled kernel reads them."""
         from pnrotor import hdf5
 
-        hdf5.check(self, doing)
+        hdf5.check(self, doing, scan=False)
         if self.frame not in FRAMES:
             raise ValueError(f"{doing} this Modes: frame {self.frame!r} is not one of {', '.join(FRAMES)}")
 
