@@ -43,7 +43,7 @@ def test_inspect_frame_history_prints_every_attribute_and_input(files, capsys):
     history = frame_history(n=4001)
     created = hdf5.metadata(files["frames"])["created"]
     assert out.startswith(f"{files['frames']}: FrameHistory\n")
-    assert f"pnrotor schema 1, written by pnrotor {__version__}, created {created}" in out
+    assert f"pnrotor schema {hdf5.SCHEMA_VERSION}, written by pnrotor {__version__}, created {created}" in out
     assert "4001 samples, t from 0.0 to 1000000.0" in out
     assert "(4001, 4) float64" in out and "scalar-first" in out
     for name in ("formulation", "method", "atol", "rtol", "nfev", "nsteps", "naccepted", "nrejected", "n_resets",

@@ -300,7 +300,7 @@ def test_a_target_an_ulp_from_f_ref_is_refused_as_evolve_refuses_it():
             evolve(*args, **kw)
     pop = evolve_many([30.0], *args[1:], frequencies=[40.0, up, 10.0, down])
     assert list(pop.termination[0]) == ["f_max", "invalid", "f_min", "invalid"]
-    assert "must be above f_ref" in pop.message[0, 1] and "must be below f_ref" in pop.message[0, 3]
+    assert "is too close to f_ref" in pop.message[0, 1] and "far enough below f_ref" in pop.message[0, 3]
     assert np.all(np.isnan(pop.v[0, [1, 3]]))
     alone = evolve_many([30.0], *args[1:], frequencies=[up, 10.0])
     assert list(alone.termination[0]) == ["invalid", "f_min"]

@@ -166,7 +166,8 @@ def test_lal_series_take_long_uniform_runs_with_their_rounding():
     shifted = dataclasses.replace(m, t=t / M, t_seconds=t, inputs=inputs)
     assert ls.SphHarmTimeSeriesGetMode(sph_harm_time_series(shifted), 2, 2).deltaT == dt
     assert polarization_series(shifted, 0.5)[0].deltaT == dt
-    every_other = dataclasses.replace(shifted, t=shifted.t[::2], t_seconds=t[::2], data=shifted.data[:, ::2])
+    every_other = dataclasses.replace(shifted, t=shifted.t[::2], t_seconds=t[::2], data=shifted.data[:, ::2],
+                                      R=shifted.R[::2], Phi=shifted.Phi[::2])
     assert ls.SphHarmTimeSeriesGetMode(sph_harm_time_series(every_other), 2, 2).deltaT == pytest.approx(2 * dt)
     t[m.t.size // 2] += 1e-6 * dt
     with pytest.raises(ValueError, match="uniform samples"):

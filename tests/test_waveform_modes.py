@@ -244,7 +244,7 @@ def test_modes_round_trip_through_hdf5_beside_their_run(tmp_path):
         assert_identical(back.inputs, h.inputs, "inputs")
         with h5py.File(tmp_path / "modes.h5", "r") as f:
             np.testing.assert_array_equal(f["data"][...], h.data)
-            assert f["data"].dtype == np.complex128 and f.attrs["kind"] == "Modes"
+            assert f["data"].dtype == np.complex128 and f.attrs["kind"].decode() == "Modes"
     with hdf5.batch(tmp_path / "run_and_modes.h5") as runs:
         runs.add("run", run)
         runs.add("modes", modes(run, ell_max=2))

@@ -8,8 +8,9 @@ every write and read of it:
   float64; chunked with a Fletcher-32 checksum per chunk and optional gzip/lzf compression, or with
   ``checksum=False`` and no compression contiguous, see `write`; an object array of `str` a fixed-length
   UTF-8 dataset, stored the same way, as is a numpy string array, read back as one of `str`), each number,
-  string (numpy's ``np.str_`` too, read back as `str`), bool or ``None`` an
-  attribute, each dict a subgroup holding its items by the same rules, each list or tuple of numbers
+  string (numpy's ``np.str_`` too, read back as `str`; a fixed-length UTF-8 attribute, `_string`, since schema 2:
+  no file holds a variable-length string, which HDF5 would keep in its unchecksummed global heap), bool or
+  ``None`` an attribute, each dict a subgroup holding its items by the same rules, each list or tuple of numbers
   a dataset marked with a ``sequence`` attribute. The ``dense`` field (the integrator's dense output, a
   function rather than data) and other callables are not written. Metadata attributes name the
   dataclass (``kind``), the schema version (``pnrotor_schema``), ``pnrotor_version`` and ``created``.
@@ -66,8 +67,10 @@ import numpy as np
 
 from pnrotor import __version__, signals
 
-SCHEMA_VERSION = 1
-"""Integer version of the layout below; `read` refuses files with a newer one."""
+SCHEMA_VERSION = 2
+"""Integer version of the layout below; `read` refuses files with a newer one.  Version 2 stores every string
+attribute as fixed-length UTF-8 (`_string`), version 1 as variable-length strings in HDF5's global heap; both are
+read."""
 
 KINDS = {
     "FrameHistory": "pnrotor.history:FrameHistory",
@@ -105,19 +108,22 @@ class Array(NamedTuple):
     """How an array field of a run is stored: its ``shape``, each entry an int, ``"N"`` (the number of samples,
     the same in every array of the run) or a name in `_DIMENSIONS`; its ``units`` attribute; its ``dtype``
     (either byte order; ``"str"``: a numpy object array of `str`, stored as fixed-length UTF-8).  Its values
-    must be finite unless ``finite`` is False (float and complex arrays; NaN then marks an absent value)."""
+    must be finite unless ``finite`` is False (float and complex arrays; NaN then marks an absent value); with
+    ``rotors`` each row along the last axis is a rotor, its squared norm a normal float64 (not zero, nor so small
+    or large that the kernels dividing by it would fail; a row of NaN where NaN is allowed)."""
 
     shape: tuple
     units: str
     dtype: str = "float64"
     finite: bool = True
+    rotors: bool = False
 
 
 _M = "M (G M / c^3, total mass M)"
 _ROTOR = Array(("N", 4), (
     "1; scalar-first unit quaternion (w, x, y, z), sign-continuous in time; "
     "frame vectors are R x R^-1, R y R^-1, R z R^-1 (Boyle 2016, eq:rotor-rotation)"
-))
+), rotors=True)
 ARRAYS = {
     "FrameHistory": {
         "t": Array(("N",), "time unit of the angular velocity (omega in rad per unit)"),
@@ -182,11 +188,19 @@ ARRAYS = {
         "inputs/atol": Array(("N",), "absolute tolerance of the integrator"),
     },
 }
+_POPULATION = ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat", "termination", "message", "nsteps", "nfev")
+ARRAYS["Population"] = {name: ARRAYS["PopulationTable"][name]._replace(
+    shape=("N", "K", *ARRAYS["PopulationTable"][name].shape[1:]), finite=False) for name in _POPULATION}
 """The array fields of each run kind (`Array`): what `write` and `read` check, and their ``units``.  A name
-``GROUP/NAME`` is the array NAME of the run's dict field GROUP (a dataset of that subgroup)."""
+``GROUP/NAME`` is the array NAME of the run's dict field GROUP (a dataset of that subgroup).  `pnrotor.Population`,
+not a kind of file (its file is a ``PopulationTable``), is checked by the same rules when it is built: the
+fields it shares with a ``PopulationTable``, with a second axis K over a list of target frequencies where it has
+one, NaN allowed (an invalid binary)."""
 
-_DIMENSIONS = {"modes": lambda values: (values["ell_max"] + 1) ** 2 - 4}
-"""Named dimensions of `ARRAYS` other than N, from the run's other values (checked first)."""
+_DIMENSIONS = {"modes": lambda values: (values["ell_max"] + 1) ** 2 - 4,
+               "K": lambda values: values["t"].shape[1] if values["t"].ndim == 2 else None}
+"""Named dimensions of `ARRAYS` other than N, from the run's other values (checked first); None: the run has no
+such axis."""
 
 UNITS = {kind: {name: array.units for name, array in arrays.items()} for kind, arrays in ARRAYS.items()}
 """``units`` attribute written on a run's datasets of `ARRAYS`, by kind and field (``GROUP/NAME`` in a subgroup)."""
@@ -291,7 +305,7 @@ def batch(path, *, overwrite=False, compression=None, checksum=True, append=Fals
     existing = None
     if append and path.is_file():
         with _open(path) as f:
-            if f.attrs.get("kind") != BATCH:
+            if _attr(f, "kind") != BATCH:
                 raise ValueError(f"{path} holds a single run, not a batch; add runs to another file")
             existing = set(_runs(f))
     else:
@@ -401,12 +415,14 @@ def read(path, group=None):
     with _open(path) as f:
         g = _run_group(f, path, group)
         where = path if group is None else f"{path} run {group!r}"
-        _check_metadata(g, where)
-        cls = _class_of(g.attrs.get("kind"), where)
-        values = _get(g, skip=_NOT_FIELDS)
+        attributes = _attributes(g)   # each read once: HDF5 attribute reads are most of the time of a small file
+        _check_metadata(attributes, where)
+        cls = _class_of(attributes["kind"], where)
+        values = _get(g, attributes, skip=_NOT_FIELDS)
         problems = layout_problems(cls, values)
-        metadata = {name: _value(g.attrs[name]) for name in _METADATA}
-        if not problems and _STRINGS_CRC in g.attrs and g.attrs[_STRINGS_CRC] != _strings_crc({**metadata, **values}):
+        metadata = {name: _value(attributes[name]) for name in _METADATA}
+        crc = attributes.get(_STRINGS_CRC)
+        if not problems and crc is not None and crc != _strings_crc({**metadata, **values}):
             problems.append("its string attributes are damaged (their CRC-32 is not the one written with them)")
         if problems:
             raise ValueError(f"{where}: {'; '.join(problems)}")
@@ -417,9 +433,9 @@ def metadata(path, group=None):
     """The metadata attributes of a run: ``kind``, ``pnrotor_schema``, ``pnrotor_version``, ``created``
     (checked: all four present, the schema version one this pnrotor reads, the others strings)."""
     with _open(path) as f:
-        g = _run_group(f, path, group)
-        _check_metadata(g, path if group is None else f"{path} run {group!r}")
-        return {name: _value(g.attrs[name]) for name in _METADATA}
+        attributes = _attributes(_run_group(f, path, group))
+        _check_metadata(attributes, path if group is None else f"{path} run {group!r}")
+        return {name: _value(attributes[name]) for name in _METADATA}
 
 
 def list_runs(path):
@@ -428,7 +444,7 @@ def list_runs(path):
         return _runs(f)
 
 
-def layout_problems(cls, values):
+def layout_problems(cls, values, scan=True):
     """What is wrong with the run `values` (field name → value, as `read` gets them from a file or `write`
     from a dataclass) of the run dataclass `cls`, as a list of sentences (empty: nothing). Checked:
 
@@ -439,7 +455,8 @@ def layout_problems(cls, values):
       not checked;
     * for the kinds in `ARRAYS`, each array's presence (``GROUP/NAME``: in the dict field GROUP), dtype (either
       byte order) and shape, every ``"N"`` the same number of samples (that of most arrays, a tie going to the
-      first), and its values finite (where `Array.finite`);
+      first), and its values finite (where `Array.finite`; with ``scan=False`` only the rotors', each a pass
+      over the array, which a kernel that NaN does not harm need not pay for);
     * for the kinds in `REQUIRED_KEYS`, the keys their dict fields must hold.
     """
     problems, kind = [], cls.__name__
@@ -465,13 +482,17 @@ def layout_problems(cls, values):
         else:
             problems.append(f"dataset {name!r} is missing" if array is None else
                             f"{_what(array)} {name!r} is {_describe(array)}, expected an array")
-    lengths = {name: array.shape[spec.shape.index("N")] for name, (spec, array) in arrays.items()
-               if "N" in spec.shape and array.ndim == len(spec.shape)}
+    sizes = {dim: size(values) for dim, size in _DIMENSIONS.items()
+             if any(dim in spec.shape for spec, _ in arrays.values())}
+    axes = {name: tuple(d for d in spec.shape if d not in sizes or sizes[d] is not None)
+            for name, (spec, array) in arrays.items()}
+    lengths = {name: array.shape[axes[name].index("N")] for name, (spec, array) in arrays.items()
+               if "N" in axes[name] and array.ndim == len(axes[name])}
     n, count = Counter(lengths.values()).most_common(1)[0] if lengths else (None, 0)
     like = [name for name, length in lengths.items() if length == n]
+    sizes["N"] = n
     for name, (spec, array) in arrays.items():
-        sizes = {"N": n, **{dim: size(values) for dim, size in _DIMENSIONS.items() if dim in spec.shape}}
-        shape = tuple(d if sizes.get(d, d) is None else sizes.get(d, d) for d in spec.shape)
+        shape = tuple(d if sizes.get(d, d) is None else sizes.get(d, d) for d in axes[name])
         if spec.dtype == "str":
             if not _is_strings(array):
                 problems.append(f"dataset {name!r} is {_describe(array)}, expected strings")
@@ -483,16 +504,28 @@ def layout_problems(cls, values):
             others = f" and {count - 1} other array{'s' * (count > 2)}" if count > 1 else ""
             samples = f" (N = {n} samples, as in {like[0]!r}{others})" if lengths.get(name, n) != n else ""
             problems.append(f"dataset {name!r} has shape {_shape(array.shape)}, expected {_shape(shape)}{samples}")
-        elif spec.finite and array.dtype.kind in "fc" and not np.isfinite(array).all():
+        elif spec.finite and (scan or spec.rotors) and array.dtype.kind in "fc" and not np.isfinite(array).all():
             bad = np.argwhere(~np.isfinite(array))
             at = tuple(bad[0].tolist()) if array.ndim > 1 else int(bad[0, 0])
             problems.append(f"dataset {name!r} has {len(bad)} non-finite value{'s' * (len(bad) > 1)} "
                             f"(NaN or inf), the first at index {at}")
+        elif spec.rotors and array.size:
+            with np.errstate(over="ignore", under="ignore"):
+                norm2 = np.einsum("...i,...i->...", array, array)
+            bad = np.argwhere(~((norm2 >= _TINY) & (norm2 <= _HUGE) | np.isnan(norm2)))
+            if len(bad):
+                at = tuple(bad[0].tolist()) if array.ndim > 2 else int(bad[0, 0])
+                problems.append(f"dataset {name!r} has {len(bad)} row{'s' * (len(bad) > 1)} of zero or extreme norm "
+                                f"(not a rotor: |R|^2 must be a normal float64), the first at index {at}")
     for name, keys in REQUIRED_KEYS.get(kind, {}).items():
         missing = [key for key in keys if key not in values[name]]
         if missing:
             problems.append(f"group {name!r} lacks {', '.join(map(repr, missing))}")
     return problems
+
+
+_TINY, _HUGE = np.finfo(np.float64).tiny, np.finfo(np.float64).max
+"""The range of a rotor's squared norm: the kernels that read rotors divide by it."""
 
 
 def _is_strings(value):
@@ -533,24 +566,35 @@ def _shape(shape):
     return f"({', '.join(map(str, shape))}{',' * (len(shape) == 1)})"
 
 
-def _check_run(run):
-    """Raise `ValueError` unless the run dataclass `run` is one `read` would accept back (`layout_problems`)."""
-    kind = _kind_of(run)
+def check(run, doing="cannot write", scan=True):
+    """Raise ``ValueError(f"{doing} this KIND: PROBLEMS")`` unless the result dataclass `run` (a run kind of
+    `KINDS`, or a `pnrotor.Population`) passes `layout_problems`: the one check of a result's invariants (its
+    fields' types, its arrays' shapes, dtypes and finite values, nonzero rotors, the keys of its dicts), which
+    `write` makes before writing (so every file written reads back), `pnrotor.modes` and `Modes`' methods before
+    their compiled kernels read the arrays, and `FrameHistory` and `Population` when they are built.  ``scan``
+    as for `layout_problems`."""
     values = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
     values = {name: value for name, value in values.items() if name not in NOT_WRITTEN and not callable(value)}
-    problems = layout_problems(type(run), values)
+    problems = layout_problems(type(run), values, scan)
     if problems:
-        raise ValueError(f"cannot write this {kind}: {'; '.join(problems)}")
+        raise ValueError(f"{doing} this {type(run).__name__}: {'; '.join(problems)}")
+
+
+def _check_run(run):
+    """Raise unless the run dataclass `run` is of a kind `write` writes (`TypeError`) and one `read` would accept
+    back (`check`'s `ValueError`)."""
+    kind = _kind_of(run)
+    check(run)
     return kind
 
 
-def _check_metadata(g, where):
-    """Raise `ValueError` unless group `g` has the four metadata attributes, ``kind``, ``pnrotor_version``
-    and ``created`` strings (the schema version is checked on opening)."""
-    missing = [name for name in _METADATA if name not in g.attrs]
-    wrong = [name for name in ("kind", "pnrotor_version", "created") if name in g.attrs
-             and not isinstance(g.attrs[name], str)]
-    if _STRINGS_CRC in g.attrs and not isinstance(g.attrs[_STRINGS_CRC], np.integer):
+def _check_metadata(attributes, where):
+    """Raise `ValueError` unless the attributes of a run group (`_attributes`) hold the four metadata attributes,
+    ``kind``, ``pnrotor_version`` and ``created`` strings (the schema version is checked on opening)."""
+    missing = [name for name in _METADATA if name not in attributes]
+    wrong = [name for name in ("kind", "pnrotor_version", "created") if name in attributes
+             and not isinstance(attributes[name], str)]
+    if _STRINGS_CRC in attributes and not isinstance(attributes[_STRINGS_CRC], np.integer):
         wrong.append(_STRINGS_CRC)
     if missing or wrong:
         raise ValueError(f"{where}: " + "; ".join([f"attribute {name!r} is missing" for name in missing]
@@ -868,7 +912,7 @@ def _put_metadata(g, kind):
     metadata = {"kind": kind, "pnrotor_schema": SCHEMA_VERSION, "pnrotor_version": __version__,
                 "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
     for name, value in metadata.items():
-        g.attrs[name] = value
+        g.attrs[name] = _string(value) if isinstance(value, str) else value
     return metadata
 
 
@@ -887,7 +931,7 @@ def _put_fields(g, run, units, storage, written=()):
         _put(g, field.name, value, storage, f"{cls.__name__}.{field.name}")
     for name, text in units.items():
         if isinstance(g.get(name), h5py.Dataset):
-            g[name].attrs["units"] = text
+            g[name].attrs["units"] = _string(text)
 
 
 def _put(g, name, value, storage, where):
@@ -911,14 +955,28 @@ def _put(g, name, value, storage, where):
             raise TypeError(f"{where}: only numeric arrays and flat lists/tuples of numbers can be written")
         dataset = _dataset(g, name, array, *storage)
         if not isinstance(value, np.ndarray):
-            dataset.attrs["sequence"] = type(value).__name__
+            dataset.attrs["sequence"] = _string(type(value).__name__)
+    elif isinstance(value, (bytes, np.bytes_)):
+        raise TypeError(f"{where}: cannot write bytes; give text as a str")
     elif value is None or isinstance(value, (str, bool, int, float, complex, np.generic)):
         try:
-            g.attrs[name] = h5py.Empty("f8") if value is None else value
+            g.attrs[name] = h5py.Empty("f8") if value is None else _string(value) if isinstance(value, str) \
+                else value
         except (TypeError, ValueError) as error:
             raise ValueError(f"cannot write {where} = {value!r}: {error}") from None
     else:
         raise TypeError(f"{where}: cannot write a {type(value).__name__}")
+
+
+def _string(text):
+    """The string `text` as an attribute's value: fixed-length UTF-8, NUL-padded (so a string may not hold a NUL;
+    the empty string is one NUL).  It lives in its object's header, which the 1.10 format checksums: a
+    variable-length string would live in HDF5's global heap, which has no checksum, and damage there made HDF5's
+    reader loop forever (schema 1; docs/hdf5-schema.md)."""
+    encoded = text.encode("utf-8", "surrogatepass")
+    if b"\0" in encoded:
+        raise ValueError("a string attribute may not contain NUL characters")
+    return np.array(encoded, dtype=h5py.string_dtype("utf-8", max(1, len(encoded))))
 
 
 def _utf8(strings, where):
@@ -1056,13 +1114,13 @@ def _open(path):
 
 
 def _check_schema(g, path):
-    if not isinstance(g.attrs.get("kind", ""), str):   # compared with strings before the run is read
+    if not isinstance(_attr(g, "kind", ""), str):   # compared with strings before the run is read
         raise ValueError(f"{path}: attribute 'kind' is not a string")
-    schema = g.attrs.get("pnrotor_schema")
+    schema = _attr(g, "pnrotor_schema")
     if schema is None:
         raise ValueError(f"{path} is an HDF5 file but not a pnrotor file (no 'pnrotor_schema' attribute)")
     if not isinstance(schema, np.integer) or not 1 <= schema <= SCHEMA_VERSION:
-        writer = _value(g.attrs.get("pnrotor_version", "an unknown version"))
+        writer = _value(_attr(g, "pnrotor_version", "an unknown version"))
         newer = isinstance(schema, np.integer) and schema > SCHEMA_VERSION
         raise ValueError(
             f"{path} has pnrotor schema version {_value(schema)!r} (written by pnrotor {writer}); "
@@ -1072,18 +1130,20 @@ def _check_schema(g, path):
 
 
 def _runs(f):
-    if f.attrs.get("kind") != BATCH:
+    if _attr(f, "kind") != BATCH:
         return ["/"]
     return sorted(name for name, g in f.items() if isinstance(g, h5py.Group) and "kind" in g.attrs)
 
 
 def _run_group(f, path, group):
+    """The group of the run `group` (None: of a one-run file) of the open file `f`: a `h5py.Group`, the root for
+    a one-run file (whose attributes are read without opening the root again for each, as the file's are)."""
     if group is None:
-        if f.attrs.get("kind") == BATCH:
+        if _attr(f, "kind") == BATCH:
             raise ValueError(f"{path} is a batch file; choose a run with group=NAME (--group NAME) from {_runs(f)}")
-        return f
-    if f.attrs.get("kind") != BATCH:
-        g = f if group == "/" else None
+        return f["/"]
+    if _attr(f, "kind") != BATCH:
+        g = f["/"] if group == "/" else None
     else:  # the one group, not `_runs`, which opens every group
         g = f.get(group) if _valid_name(group) else None
         g = g if isinstance(g, h5py.Group) and "kind" in g.attrs else None
@@ -1111,6 +1171,25 @@ def _defaulted(cls):
     }
 
 
+def _attr(obj, name, default=None):
+    """Attribute `name` of the group or dataset `obj` as h5py reads it, but a fixed-length string (UTF-8, how
+    `write` stores strings since schema 2, `_string`; or ASCII, as h5py writes ``bytes``) as `str`, as h5py gives
+    a variable-length one (schema 1); `default` if there is none."""
+    attributes = obj.attrs
+    return _decoded(attributes, name) if name in attributes else default
+
+
+def _attributes(obj):
+    """All attributes of `obj` as `_attr` gives them, name → value, each read once."""
+    attributes = obj.attrs
+    return {name: _decoded(attributes, name) for name in attributes}
+
+
+def _decoded(attributes, name):
+    value = attributes[name]
+    return value.decode("utf-8", "surrogatepass") if isinstance(value, np.bytes_) else value
+
+
 def _value(attribute):
     """An attribute as the Python value written: None for empty, int/float/bool for numpy scalars."""
     if isinstance(attribute, h5py.Empty):
@@ -1118,8 +1197,10 @@ def _value(attribute):
     return attribute.item() if isinstance(attribute, np.generic) else attribute
 
 
-def _get(g, skip=()):
-    values = {name: _value(attribute) for name, attribute in g.attrs.items() if name not in skip}
+def _get(g, attributes=None, skip=()):
+    """The values stored in group `g` (its `_attributes` if given), but the attributes `skip`: name → value."""
+    attributes = _attributes(g) if attributes is None else attributes
+    values = {name: _value(value) for name, value in attributes.items() if name not in skip}
     for name, item in g.items():
         if isinstance(item, h5py.Group):
             values[name] = _get(item)
@@ -1127,6 +1208,6 @@ def _get(g, skip=()):
             values[name] = item.asstr()[...]
         else:
             array = item[...]
-            sequence = item.attrs.get("sequence")
+            sequence = _attr(item, "sequence")
             values[name] = array if sequence is None else _SEQUENCES[sequence](array.tolist())
     return values

@@ -29,10 +29,14 @@ def evolve_row(params):
     run = evolve(**params)
     if wave is None:
         return run
-    from pnrotor.waveform.modes import modes
+    import warnings
+
+    from pnrotor.waveform.modes import CoarseSamplingWarning, modes
 
     ell_max, order2, distance = wave
-    return run, modes(run, ell_max, order2 / 2, distance)
+    with warnings.catch_warnings():   # a row's sampling is the table's choice (--modes' help says steps are coarse)
+        warnings.simplefilter("ignore", CoarseSamplingWarning)
+        return run, modes(run, ell_max, order2 / 2, distance)
 
 
 def attempt(params):

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from pnrotor.batch import Outcome, check_output, read_batch
+from pnrotor.history import short_repr
 
 __all__ = ["PopulationTable", "Plan", "plan", "run", "unsupported", "SHARED"]
 
@@ -72,6 +73,8 @@ class PopulationTable:
     nsteps: np.ndarray
     nfev: np.ndarray
     inputs: dict = field(default_factory=dict)
+
+    __repr__ = short_repr
 
     def __len__(self):
         return self.t.shape[0]

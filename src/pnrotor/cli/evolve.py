@@ -6,7 +6,7 @@ duration, orbits, initial and final v and GW frequency, the termination of each 
 the integrator's work, wall time) and writes the `Evolution` with `pnrotor.hdf5.write` to ``-o FILE``,
 by default ``waveforms/NAME.h5`` in the current folder, NAME built from the parameters
 (`default_name`; ``waveforms/`` is created if missing, an explicit ``-o`` folder is not). An existing
-file is refused before anything is computed unless ``--overwrite``.
+file is refused before anything is computed unless ``--overwrite``.  ``--chi1``/``--chi2`` default to zero.
 
 Batch: ``pnrotor evolve --batch params.csv`` (or ``.toml``) runs one binary per CSV row or TOML
 ``[[binary]]`` table, with columns/keys named like the options (`COLUMNS`; vectors as ``"x,y,z"``
@@ -45,6 +45,9 @@ PRECESSION = ("averaged", "averaged_varpi", "instantaneous")
 ELL_MAX, AMPLITUDE_ORDER = 8, 3.5
 """--ell-max and --amplitude-order when not given: copies of `pnrotor.modes`' defaults, so that parsing the command
 line does not import numba (tests/test_cli_evolve.py checks that they agree)."""
+SPINS = ("chi1", "chi2")
+"""The options of `REQUIRED` that a single run may leave out: zero spins."""
+
 NOT_WITH_POPULATION = ("jobs", "scheduler", "resume", "modes", "ell_max", "amplitude_order", "distance",
                        "polarizations", "inclination", "phi_ref")
 """Options of the other batch modes, refused with --population."""
@@ -62,8 +65,10 @@ def add_parser(subparsers):
     binary = parser.add_argument_group("binary (one run)")
     binary.add_argument("--m1", type=float, metavar="MSUN", help="mass of body 1 in solar masses")
     binary.add_argument("--m2", type=float, metavar="MSUN", help="mass of body 2 in solar masses")
-    binary.add_argument("--chi1", metavar="X,Y,Z", help="dimensionless spin of body 1 at f_ref, |chi1| <= 1")
-    binary.add_argument("--chi2", metavar="X,Y,Z", help="dimensionless spin of body 2 at f_ref, |chi2| <= 1")
+    binary.add_argument("--chi1", metavar="X,Y,Z", help="dimensionless spin of body 1 at f_ref, |chi1| <= 1 "
+                        "(default 0,0,0)")
+    binary.add_argument("--chi2", metavar="X,Y,Z", help="dimensionless spin of body 2 at f_ref, |chi2| <= 1 "
+                        "(default 0,0,0)")
     binary.add_argument("--f-ref", type=float, metavar="HZ",
                         help="GW frequency (twice the orbital) at which the spins are given; t = 0 there")
     model = parser.add_argument_group("model and output (with --batch: defaults for empty cells)")
@@ -211,12 +216,12 @@ def _run_one(args):
     from pnrotor.batch import backends
 
     start = time.perf_counter()
-    missing = [f"--{key.replace('_', '-')}" for key in REQUIRED if getattr(args, key) is None]
+    missing = [f"--{key.replace('_', '-')}" for key in REQUIRED if getattr(args, key) is None and key not in SPINS]
     if missing:
         raise UsageError(f"missing {', '.join(missing)} (or give --batch FILE)")
     params = {key: getattr(args, key) for key in REQUIRED}
-    params["chi1"] = parse_vector(args.chi1, "--chi1")
-    params["chi2"] = parse_vector(args.chi2, "--chi2")
+    for key in SPINS:   # a nonspinning body by default
+        params[key] = (0.0, 0.0, 0.0) if params[key] is None else parse_vector(params[key], f"--{key}")
     for key, default in DEFAULTS.items():
         value = getattr(args, key)
         params[key] = default if value is None else value
@@ -254,7 +259,15 @@ def _run_one(args):
     else:
         run = backends.evolve_row(params)
         samples = len(run)
-        groups = [("run", run)] + ([("modes", modes.modes(run, ell_max, order2 / 2, distance))] if args.modes else [])
+        groups = [("run", run)]
+        if args.modes:
+            import warnings
+
+            with warnings.catch_warnings(record=True) as caught:   # each on one line, as the command's other messages
+                warnings.simplefilter("always")
+                groups.append(("modes", modes.modes(run, ell_max, order2 / 2, distance)))
+            for warning in caught:
+                print(f"pnrotor evolve: warning: {warning.message}", file=sys.stderr)
     if default_folder:
         path.parent.mkdir(exist_ok=True)
     from pnrotor import hdf5

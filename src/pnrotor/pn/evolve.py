@@ -41,10 +41,12 @@ import functools
 import inspect
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..history import short_repr
 from ..ode import EVENTS_SIG, RHS_SIG, by_address
 from ..ode.common import OUT_FINAL, OUT_STEPS, controller, default_hook
 from ..ode.dop853 import run_core
@@ -116,6 +118,8 @@ class Evolution:
     termination: str
     stats: dict = field(default_factory=dict)
     inputs: dict = field(default_factory=dict)
+
+    __repr__ = short_repr
 
     @property
     def n_hat(self):
@@ -467,6 +471,7 @@ def integrate(s):
     :func:`pnrotor.pn.sampling.compile_output_kernel`): (forward result, backward result or None, the forward
     termination, :class:`Evolution` stats but ``wall_time_s``)."""
     system = build_system(s)
+    warn_if_unresolved(s.atol, s.rtol, system.y0)
     compile_output_kernel(s)
     dense = s.sampling in ("dt", "per_orbit")
     t_eval = "final" if s.sampling == "final" else None
@@ -477,6 +482,25 @@ def integrate(s):
     stats = _stats(res_f, res_b, term_f, term_b)
     stats["wall_time_integrate_s"] = t_int
     return res_f, res_b, term_f, stats
+
+
+def warn_if_unresolved(atol, rtol, y0):
+    """A warning naming ``atol`` (and True) if the tolerance of a component of the initial state(s) ``y0``,
+    atol + rtol |yᵢ|, is below the float64 resolution of its value, the spacing of float64 numbers there
+    (``np.spacing(|yᵢ|)``: 2.2e-16 for a rotor component of 1, 1.4e-17 for v = 0.094): the rounding of yᵢ in a
+    step then exceeds what the step may err, so the run can be no more accurate than at that bound, and its steps
+    shrink towards the rounding noise, down to max_steps.  A warning, not an error: such a run is well defined and
+    often ends as asked, and a tiny atol is how a run is driven to a step underflow on purpose."""
+    y = np.abs(y0)
+    need = np.spacing(y) - rtol * y
+    if not (atol >= need).all():
+        bound = float(need.max())
+        warnings.warn(f"atol = {float(atol)!r} is below the float64 resolution of the state: with rtol = "
+                      f"{float(rtol)!r} the tolerance must be at least {bound:.3g} (the spacing of float64 numbers "
+                      f"at the initial state's values) to be met; this run can be no more accurate than at atol = "
+                      f"{bound:.3g}, and its steps may shrink until max_steps ends it", stacklevel=3)
+        return True
+    return False
 
 
 def check_inputs(m1, m2, chi1, chi2, f_ref, **options):

@@ -45,6 +45,7 @@ import numpy as np
 from numba import njit
 
 from .. import numba_cache, threads
+from ..history import short_repr
 from ..ode.common import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
                           default_hook, events_function, function_addresses)
 from ..ode.dop853 import core as dop853_core
@@ -52,7 +53,7 @@ from ..ode.events import crossed, locate_root
 from ..ode.result import STATUS_EVENT, contd8
 from . import initial as _ini
 from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _ended_at, _tolerances, build_rows, end_name,
-                     half, kmax_of, population_parts, termination)
+                     half, kmax_of, population_parts, termination, warn_if_unresolved)
 from .sampling import _fill_history, output_mode
 from .settings import Binaries, binary_settings, options, population_settings, target_v
 from .system import EV_V_END, N_EVENTS, P_VEND
@@ -90,6 +91,9 @@ class Population:
     inputs : dict — the options shared by every binary
     stats : dict — ``wall_time_s`` of the call and ``wall_time_integrate_s`` of its compiled loops (the rest is
         Python: checks and parameter vectors)
+
+    Checked when built (:func:`pnrotor.hdf5.check`, by ``pnrotor.hdf5.ARRAYS["Population"]``): a ValueError names
+    every array of the wrong type, dtype or shape and every zero rotor.
     """
 
     t: np.ndarray
@@ -106,6 +110,13 @@ class Population:
     nfev: np.ndarray
     inputs: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
+
+    __repr__ = short_repr
+
+    def __post_init__(self):
+        from pnrotor import hdf5
+
+        hdf5.check(self, "cannot build")   # the arrays' shapes, dtypes and rotors, by hdf5.ARRAYS["Population"]
 
     def __len__(self):
         return self.t.shape[0]
@@ -196,7 +207,13 @@ def _per_binary(x, n, name, shape=(), unit=None):
 def _numbers(x, name, shape, unit=None):
     """x as a float64 array, or a ValueError naming it and the ``shape`` expected: booleans are refused, as
     ``evolve`` refuses them, and so are text, complex numbers and ragged sequences; an astropy Quantity is
-    converted to ``unit`` (M_sun, Hz), or refused where there is none."""
+    converted to ``unit`` (M_sun, Hz), or refused where there is none; so is a numpy masked array with masked
+    entries (numpy would compute its hidden values)."""
+    if np.ma.is_masked(x):
+        count = np.ma.count_masked(x)
+        raise ValueError(f"{name} has {count} masked entr{'ies' if count > 1 else 'y'} (a numpy masked array): "
+                         f"evolve_many would compute the values hidden under the mask; drop those binaries or fill "
+                         f"them (x.filled(...))")
     x = _ini.in_unit(x, unit, name, "numbers" if unit is None else f"numbers (in {unit})")
     try:
         if _has_bool_or_text(x) or np.iscomplexobj(x):
@@ -435,7 +452,7 @@ integrate_rotor, precession, max_steps, tidal_order
                             k2l[i], l1l[i], l2l[i]) not in (None, str(e)):
                 out.message[i * K + k] = why
 
-    integrating = 0.0
+    integrating, unresolved = 0.0, False
     with _collector_paused():
         for start in range(0, n, CHUNK):
             stop = min(start + CHUNK, n)
@@ -473,6 +490,7 @@ integrate_rotor, precession, max_steps, tidal_order
                     continue
                 bg = Binaries(*(x[g] for x in b))
                 rhs, events, P, Y0, bases, checks = build_rows(opts, bg, parts, g)
+                unresolved = unresolved or warn_if_unresolved(opts.atol, opts.rtol, Y0)   # once per call
                 keep = np.ones(g.size, dtype=bool)
                 for q, c in enumerate(checks.tolist()):
                     if _ended_at(*c[:4]) or c[4]:

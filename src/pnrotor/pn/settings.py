@@ -371,7 +371,11 @@ def target_v(f, name, forward, f_ref, v0, M_sec):
         raise ValueError(f"{name} = {f} Hz gives v = {v:.4g} < {V_MIN:g}; for these masses {name} must be at "
                          f"least {_ini.frequency_from_v(V_MIN, M_sec):.6g} Hz")
     if not (v > v0 if forward else v < v0):
-        raise ValueError(f"{name} = {f} Hz must be {'above' if forward else 'below'} f_ref = {f_ref} Hz")
+        side = "above" if forward else "below"
+        if f > f_ref if forward else f < f_ref:
+            raise ValueError(f"{name} = {f!r} Hz is too close to f_ref = {f_ref!r} Hz: both give v = {v0!r} in "
+                             f"float64; {name} must be far enough {side} f_ref to give a v {side} it")
+        raise ValueError(f"{name} = {f} Hz must be {side} f_ref = {f_ref} Hz")
     return v
 
 
@@ -432,23 +436,40 @@ MAX_PER_ORBIT = 2 ** 53
 """The largest number of samples per orbit taken (exact as a float; the memory check refuses far fewer)."""
 
 
+SAMPLING_FORMS = ("'steps', 'final', a time step in seconds (a number, an astropy time, ('dt', seconds), "
+                  "{'dt': seconds}, or text such as '1/4096' or '0.000244'), or n samples per orbit (('per_orbit', n), "
+                  "{'per_orbit': n} or 'per_orbit:n', n an integer from 1 to 2^53)")
+"""Every form `pnrotor.evolve`'s ``sampling`` takes (the command line's spellings among them), as its errors list
+them."""
+
+
 def parse_sampling(sampling):
-    """→ ('steps', None) | ('final', None) | ('dt', seconds) | ('per_orbit', n)."""
+    """→ ('steps', None) | ('final', None) | ('dt', seconds) | ('per_orbit', n), from any of
+    :data:`SAMPLING_FORMS`; a ValueError listing them."""
     if isinstance(sampling, str):
         s = sampling.strip().lower()
         if s in ("steps", "step", "accepted"):
             return "steps", None
         if s == "final":
             return "final", None
-        raise ValueError(f"sampling string must be 'steps' or 'final', got {sampling!r}")
+        numerator, slash, denominator = s.partition("/")
+        if s.startswith("per_orbit:"):
+            count = s.partition(":")[2].strip()
+            sampling = ("per_orbit", int(count) if count.isascii() and count.isdigit() else count)
+        else:
+            try:
+                sampling = float(numerator) / float(denominator) if slash else float(s)
+            except (ValueError, ZeroDivisionError):
+                raise ValueError(f"sampling must be {SAMPLING_FORMS}; got {sampling!r}") from None
     if isinstance(sampling, dict):
         if len(sampling) != 1:
-            raise ValueError("sampling dict must have exactly one key: 'dt' or 'per_orbit'")
+            raise ValueError(f"a sampling dict must have exactly one key, 'dt' or 'per_orbit': sampling must be "
+                             f"{SAMPLING_FORMS}; got {sampling!r}")
         (key, val), = sampling.items()
         sampling = (key, val)
     if isinstance(sampling, tuple):
         if len(sampling) != 2:
-            raise ValueError("sampling tuple must be ('dt', seconds) or ('per_orbit', n)")
+            raise ValueError(f"sampling must be {SAMPLING_FORMS}; got {sampling!r}")
         key, val = sampling
         if key == "dt":
             return "dt", _ini.seconds(val, "sampling dt")
@@ -456,6 +477,8 @@ def parse_sampling(sampling):
             if not (_ini._real(val) and 1 <= val <= MAX_PER_ORBIT and val == int(val)):   # no NaN, inf, 10**400
                 raise ValueError(f"sampling per_orbit must be an integer from 1 to 2^53, got {val!r}")
             return "per_orbit", int(val)
-        raise ValueError(f"unknown sampling key {key!r}; use 'dt' or 'per_orbit'")
+        raise ValueError(f"unknown sampling key {key!r}: sampling must be {SAMPLING_FORMS}; got {sampling!r}")
     # a bare number or Quantity: Δt in seconds
+    if not (_ini._real(sampling) or hasattr(sampling, "unit")):
+        raise ValueError(f"sampling must be {SAMPLING_FORMS}; got {sampling!r}")
     return "dt", _ini.seconds(sampling, "sampling dt")

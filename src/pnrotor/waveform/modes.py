@@ -27,11 +27,13 @@ quadrupole formula (tests/test_waveform_modes.py).
 
 import math
 import sys
+import warnings
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from pnrotor import quaternion as q
+from pnrotor.history import short_repr
 from pnrotor.pn import sampling as _sampling
 from pnrotor.pn.evolve import Evolution
 from pnrotor.pn.initial import _integer, _real
@@ -42,7 +44,7 @@ from pnrotor.waveform.layout import ell_m as _ell_m
 from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.waveform.wigner import rotate_modes
 
-__all__ = ["Modes", "modes", "check_arguments", "FRAMES"]
+__all__ = ["Modes", "modes", "check_arguments", "FRAMES", "CoarseSamplingWarning"]
 
 FRAMES = ("inertial", "coprecessing", "coorbital")
 ELL_MAX = 8
@@ -56,15 +58,43 @@ def _megaparsecs(distance):
 
 
 def _angle(value, name):
-    """Radians from a finite real number (radians) or an astropy angle; ValueError naming ``name``."""
+    """Radians from a finite real number in [−2π, 2π] (radians) or an astropy angle (any value); ValueError naming
+    ``name``: a number beyond 2π is most likely in degrees."""
     u = sys.modules.get("astropy.units")   # a Quantity exists only if its module was imported
     if u is not None and isinstance(value, u.Quantity):
         if value.unit.physical_type != "angle":
             raise ValueError(f"{name} must be an angle (radians, or an astropy angle); got {value!r}")
         value = value.to_value(u.rad)
+    elif _real(value) and math.isfinite(value) and not -2.0 * math.pi <= value <= 2.0 * math.pi:
+        raise ValueError(f"{name} = {value!r} is outside [-2 pi, 2 pi]: angles are in radians ({value!r} degrees is "
+                         f"{math.radians(value):.6g} rad; or pass an astropy angle, such as {value!r} * u.deg)")
     if not (_real(value) and math.isfinite(value)):
         raise ValueError(f"{name} must be a finite angle in radians (a number, or an astropy angle); got {value!r}")
     return float(value)
+
+
+class CoarseSamplingWarning(UserWarning):
+    """Modes (or polarizations) of samples too far apart in orbital phase to be a waveform: the run's
+    ``sampling`` (its integrator's steps, by default) is too coarse."""
+
+
+def _warn_if_coarse(Phi, inputs, what):
+    """A :class:`CoarseSamplingWarning` naming ``sampling`` if the orbital phase Φ advances by π/2 or more between
+    two samples somewhere: h₂₂ ∝ e^{−2iΦ} then has at most two samples per cycle (Nyquist's limit, where a
+    sinusoid is no longer determined by its samples), so ``what`` cannot be interpolated or Fourier transformed
+    as a waveform.  A warning rather than an error: the values at the samples are right (and 'steps' is the
+    default sampling, of runs whose modes are asked for their amplitudes' evolution too)."""
+    if np.size(Phi) < 2:
+        return
+    step = float(np.abs(np.diff(Phi)).max())
+    if step >= 0.5 * math.pi:
+        given = inputs.get("sampling", "?")
+        given = {"dt": f"{inputs.get('sampling_value', math.nan):g} s", "per_orbit":
+                 f"'per_orbit:{inputs.get('sampling_value', math.nan):g}'"}.get(given, repr(given))
+        warnings.warn(f"{what} of a run sampled at sampling={given} are coarse: the orbital phase advances by up to "
+                      f"{step:.3g} rad between samples (pi/2 or more: at most two samples per cycle of h22); "
+                      f"for a waveform evolve with a finer sampling, such as sampling=1/4096 or 'per_orbit:16'",
+                      CoarseSamplingWarning, stacklevel=3)
 
 
 @dataclass(eq=False)
@@ -95,6 +125,8 @@ class Modes:
     distance_Mpc: float = None
     inputs: dict = field(default_factory=dict)
 
+    __repr__ = short_repr
+
     @property
     def ell_m(self):
         """[(ℓ, m), …] of the rows of ``data``."""
@@ -117,11 +149,26 @@ class Modes:
         return q.multiply(self.R, np.column_stack((np.cos(half), np.zeros_like(half), np.zeros_like(half),
                                                    np.sin(half))))
 
+    def _check(self, doing):
+        """A ValueError naming ``doing`` unless these modes are well formed (:func:`pnrotor.hdf5.check`: what
+        ``hdf5.write`` checks, but for NaN in ``data``: harmless to the kernels, and a search through the largest
+        array) and in one of :data:`FRAMES`, before a compiled kernel reads them."""
+        from pnrotor import hdf5
+
+        hdf5.check(self, doing, scan=False)
+        if self.frame not in FRAMES:
+            raise ValueError(f"{doing} this Modes: frame {self.frame!r} is not one of {', '.join(FRAMES)}")
+
     def in_frame(self, frame):
         """These modes in another frame (one of :data:`FRAMES`): h' = 𝔇(R'⁻¹ R) h (in their own frame, these
         modes themselves, not a copy)."""
         if frame not in FRAMES:
             raise ValueError(f"frame must be one of {', '.join(FRAMES)}; got {frame!r}")
+        self._check("cannot rotate")
+        return self._rotated(frame)
+
+    def _rotated(self, frame):
+        """:meth:`in_frame` of modes already checked."""
         if frame == self.frame:
             return self
         _check_memory(self.data.shape[0], self.data.shape[1], "rotating them")
@@ -151,9 +198,11 @@ class Modes:
         finite numbers in radians or astropy angles."""
         inclination, phi_ref, psi = (_angle(x, name) for x, name in ((inclination, "inclination"),
                                                                       (phi_ref, "phi_ref"), (psi, "psi")))
+        self._check("cannot compute the polarizations of")
+        _warn_if_coarse(self.Phi, self.inputs, "polarizations")
         to_Mpc = self.distance_Mpc if distance is None else _megaparsecs(distance)
         scale = 1.0 if to_Mpc is None else _scale(self.distance_Mpc, to_Mpc, self.inputs["M_seconds"])
-        data = self.in_frame("inertial").data
+        data = self._rotated("inertial").data
         hp, hc = _pol.polarizations(data, self.ell_m, inclination, 0.5 * np.pi - phi_ref, psi)
         return scale * hp, scale * hc
 
@@ -265,6 +314,10 @@ def _modes_of_run(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None
     """:func:`modes` of an Evolution."""
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
     memory = check_memory_flag(memory)
+    from pnrotor import hdf5
+
+    hdf5.check(evolution, "cannot compute the modes of")   # a malformed run would be read out of bounds
+    _warn_if_coarse(evolution.Phi, evolution.inputs, "modes")
     _check_memory(n_modes(ell_max), len(evolution), "modes()", streamed=True)
     inputs = evolution.inputs
     tides = tides_of(inputs, tidal_order)
