@@ -54,6 +54,7 @@ from pnrotor.waveform import amplitudes as _amp
 from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.waveform.modes import (ELL_MAX, Modes, _angle, _scale, check_arguments, check_memory_flag, spins_and_frame,
                                    tides_of, wave_inputs)
+from pnrotor.waveform.modes import modes as modes_of_run
 from pnrotor.waveform.polarizations import Polarizations
 from pnrotor.waveform.wigner import _CHUNK, MIN_PART, _store
 
@@ -326,12 +327,26 @@ def polarizations(m1, m2, chi1, chi2, f_ref, *, inclination, distance, delta_t, 
     return p.t_seconds, p.h_plus, p.h_cross
 
 
-def modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=ELL_MAX,
-          amplitude_order=AMPLITUDE_ORDER, memory=False, **options):
-    """:class:`~pnrotor.waveform.modes.Modes` of the binary (``pnrotor.evolve``'s parameters and ``options``) at t = k
-    ``delta_t`` seconds: those of ``pnrotor.modes(pnrotor.evolve(…, sampling=delta_t), ell_max, amplitude_order,
-    distance, memory=memory)``, bitwise, computed in one pass from the integrator's dense output without forming its history
-    (``pnrotor.modes`` with a binary's parameters)."""
+def modes(m1, *args, **kwargs):
+    """Inertial-frame modes h_ℓm as :class:`~pnrotor.waveform.modes.Modes` (``pnrotor.modes``), of a run or of a binary:
+
+    * ``modes(evolution, ell_max=8, amplitude_order=3.5, distance=None, tidal_order=None, memory=False)``: of the
+      samples of an :class:`~pnrotor.pn.evolve.Evolution` (:func:`pnrotor.waveform.modes.modes`);
+    * ``modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=8,
+      amplitude_order=3.5, memory=False, **evolve_options)``: those of ``pnrotor.modes(pnrotor.evolve(…,
+      sampling=delta_t), ell_max, amplitude_order, distance, memory=memory)``, bitwise, computed in one pass from the
+      integrator's dense output without forming its history."""
+    if isinstance(m1, Evolution):
+        return modes_of_run(m1, *args, **kwargs)
+    if not (_ini._real(m1) or hasattr(m1, "unit")):   # a mass: a number, or an astropy Quantity
+        raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads) or a "
+                        f"binary's m1, m2, chi1, chi2, f_ref with delta_t=..., got {type(m1).__name__}")
+    return _binary_modes(m1, *args, **kwargs)
+
+
+def _binary_modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=ELL_MAX,
+                  amplitude_order=AMPLITUDE_ORDER, memory=False, **options):
+    """:func:`modes` of a binary."""
     check_arguments(ell_max, amplitude_order, distance)
     check_memory_flag(memory)
     return stream(m1, m2, chi1, chi2, f_ref, delta_t=delta_t, f_min=f_min, f_max=f_max, **options).modes(
