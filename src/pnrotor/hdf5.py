@@ -114,6 +114,17 @@ _ROTOR = Array(("N", 4), (
     "1; scalar-first unit quaternion (w, x, y, z), sign-continuous in time; "
     "frame vectors are R x R^-1, R y R^-1, R z R^-1 (Boyle 2016, eq:rotor-rotation)"
 ))
+_STATE = {
+    "t": Array(("N",), _M + "; t = 0 at f_ref"),
+    "t_seconds": Array(("N",), "s; t = 0 at f_ref"),
+    "v": Array(("N",), "c; PN parameter v = (M Omega_orb)^(1/3)"),
+    "Phi": Array(("N",), "rad; orbital phase, 0 at f_ref"),
+    "chi1": Array(("N", 3), "1; dimensionless spin S1 / m1^2, inertial-frame components"),
+    "chi2": Array(("N", 3), "1; dimensionless spin S2 / m2^2, inertial-frame components"),
+    "R": _ROTOR,
+    "ell_hat": Array(("N", 3), "1; unit normal to the orbital plane, inertial-frame components"),
+}
+"""The state of a binary in a `PopulationTable`, one per row: at its target, and where its integration stopped."""
 ARRAYS = {
     "FrameHistory": {
         "t": Array(("N",), "time unit of the angular velocity (omega in rad per unit)"),
@@ -139,16 +150,13 @@ ARRAYS = {
     },
     "PopulationTable": {
         "name": Array(("N",), "the row's name (the batch table's name column, or its default name)", "str"),
-        "t": Array(("N",), _M + "; t = 0 at f_ref"),
-        "t_seconds": Array(("N",), "s; t = 0 at f_ref"),
-        "v": Array(("N",), "c; PN parameter v = (M Omega_orb)^(1/3)"),
-        "Phi": Array(("N",), "rad; orbital phase, 0 at f_ref"),
-        "chi1": Array(("N", 3), "1; dimensionless spin S1 / m1^2, inertial-frame components"),
-        "chi2": Array(("N", 3), "1; dimensionless spin S2 / m2^2, inertial-frame components"),
-        "R": _ROTOR,
-        "ell_hat": Array(("N", 3), "1; unit normal to the orbital plane, inertial-frame components"),
+        **{name: array._replace(units=array.units + "; at the row's target, NaN where reached is false", finite=False)
+           for name, array in _STATE.items()},
         "termination": Array(("N",), "why the integration to this state stopped (f_max, f_min or the end of the "
                              "inspiral, as pnrotor.evolve names it)", "str"),
+        "reached": Array(("N",), "whether the integration reached the row's target (f_max, f_min or the end of the "
+                         "inspiral)", "bool"),
+        **{"stopped_at/" + name: array._replace(finite=False) for name, array in _STATE.items()},
         "message": Array(("N",), "the termination's explanation", "str"),
         "nsteps": Array(("N",), "step attempts of the integration that gave the state", "int64"),
         "nfev": Array(("N",), "right-hand-side evaluations of that integration", "int64"),
@@ -349,6 +357,94 @@ class Batch:
             raise
         self.names.append(name)
         self._added.add(name)
+
+
+def concatenate(path, sources, *, overwrite=False, compression=None, checksum=True):
+    """Write the one-run files `sources` (pnrotor files of one kind, e.g. the chunks of a population) as one run at
+    `path`, atomically as `write` does, and return the path: each array of `ARRAYS` with N samples along its first
+    axis is the concatenation of the sources' in their order; every other field is the first source's and must be
+    the same in each (a ValueError otherwise).  The sources are read one at a time, as `read` reads them (checked),
+    so the memory taken is that of the largest, whatever the total.  ``compression`` and ``checksum`` as in
+    `write`."""
+    path, sources = Path(path), [Path(source) for source in sources]
+    if not sources:
+        raise ValueError("concatenate needs at least one source file")
+    _check_compression(compression)
+    _check_checksum(checksum)
+    _check_target(path, overwrite)
+    first = read(sources[0])
+    kind = _kind_of(first)
+    stacked = {name: spec for name, spec in ARRAYS.get(kind, {}).items() if spec.shape[:1] == ("N",)}
+    if not stacked:
+        raise ValueError(f"runs of kind {kind} have no arrays of samples to concatenate")
+    lengths, widths = [], {}
+    for source in sources:   # the length of each and the widest string of each column, from the files' metadata
+        with _open(source) as f:
+            lengths.append(f[next(iter(stacked))].shape[0])
+            for name, spec in stacked.items():
+                if spec.dtype == "str":
+                    widths[name] = max(widths.get(name, 1), f[name].dtype.itemsize)
+    values = _fields(first)
+    for name, spec in stacked.items():
+        group, _, key = name.rpartition("/")
+        array = values[group][key] if group else values[name]
+        dtype = h5py.string_dtype("utf-8", widths[name]) if spec.dtype == "str" else array.dtype
+        _set(values, name, _Unwritten((sum(lengths),) + array.shape[1:], np.dtype(dtype)))
+    template = type(first)(**values)
+    _check_space(path, _run_bytes(template), compression)
+    with _replacing(path, overwrite) as f:
+        _put_run(f, template, compression, checksum)
+        start = 0
+        for i, (source, length) in enumerate(zip(sources, lengths)):
+            values = _fields(first if i == 0 else read(source))
+            for name in stacked:
+                group, _, key = name.rpartition("/")
+                array = values[group][key] if group else values[name]
+                if array.shape[0] != length:
+                    raise ValueError(f"{source} changed while it was concatenated")
+                f[name][start:start + length] = _utf8(array, name) if stacked[name].dtype == "str" else array
+                _set(values, name, None)
+            if not _same(values, _fields(template, unset=stacked)):
+                raise ValueError(f"{source} differs from {sources[0]} in more than its arrays of samples: not "
+                                 "concatenated")
+            start += length
+    return path
+
+
+class _Unwritten(NamedTuple):
+    """An array that `_dataset` creates empty, of this shape and dtype, to be written in slices (`concatenate`)."""
+
+    shape: tuple
+    dtype: np.dtype
+
+    ndim = property(lambda self: len(self.shape))
+    size = property(lambda self: int(np.prod(self.shape)))
+    itemsize = property(lambda self: self.dtype.itemsize)
+    nbytes = property(lambda self: self.size * self.itemsize)
+
+
+def _fields(run, unset=()):
+    """The fields of the run dataclass `run`, name → value, its dicts copied (and the arrays named in `unset`,
+    ``GROUP/NAME`` in a dict field, set to None)."""
+    values = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
+    values = {name: dict(value) if isinstance(value, dict) else value for name, value in values.items()}
+    for name in unset:
+        _set(values, name, None)
+    return values
+
+
+def _set(values, name, value):
+    group, _, key = name.rpartition("/")
+    (values[group] if group else values)[key] = value
+
+
+def _same(a, b):
+    """Whether two fields' values are equal: dicts item by item, arrays in shape and bytes, NaN equal to NaN."""
+    if isinstance(a, dict) or isinstance(b, dict):
+        return isinstance(a, dict) and isinstance(b, dict) and a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.shape(a) == np.shape(b) and np.asarray(a).tobytes() == np.asarray(b).tobytes()
+    return a == b or a != a and b != b
 
 
 def read(path, group=None):
@@ -596,7 +692,7 @@ def _run_bytes(run):
 
 def _array_bytes(value):
     """Bytes of the numpy arrays in `value` and in the dicts it holds."""
-    if isinstance(value, np.ndarray):
+    if isinstance(value, (np.ndarray, _Unwritten)):
         return value.nbytes
     if isinstance(value, dict):
         return sum(_array_bytes(item) for item in value.values())
@@ -811,8 +907,8 @@ def _put(g, name, value, storage, where):
         for key, item in value.items():
             _check_name(key, f"key of {where}")
             _put(sub, key, item, storage, f"{where}[{key!r}]")
-    elif _is_strings(value):
-        _dataset(g, name, _utf8(value, where), *storage)
+    elif _is_strings(value) or isinstance(value, _Unwritten):
+        _dataset(g, name, _utf8(value, where) if _is_strings(value) else value, *storage)
     elif isinstance(value, np.ndarray) or type(value) in _SEQUENCES.values():
         try:
             array = np.asarray(value)
@@ -857,7 +953,10 @@ def _dataset(g, name, array, compression, checksum):
             options.update(compression=compression, shuffle=True)
             if compression == "gzip":
                 options["compression_opts"] = _GZIP_LEVEL
-    dataset = g.create_dataset(name, data=array, **options)
+    if isinstance(array, _Unwritten):
+        dataset = g.create_dataset(name, shape=array.shape, dtype=array.dtype, **options)
+    else:
+        dataset = g.create_dataset(name, data=array, **options)
     if "chunks" in options:   # HDF5 keeps the last chunks in its cache: written now, a full disk raises here
         dataset.flush()       # rather than in the dataset's deallocation, where h5py can only print it
     if array.nbytes >= _WRITEBACK_BYTES and g.file.filename in _WRITEBACKS:

@@ -305,7 +305,8 @@ def _pool_results(start, pool, futures, feed, jobs):
 
 def results_dask(tasks, scheduler, work=None, window=None):
     """One Dask task per (index, payload) of `tasks` (an iterable, read as tasks are submitted, at most `window` in
-    flight; None: all at once) on the Dask scheduler `scheduler` (an address, connected to here, or a
+    flight, or ``window(threads)`` for a function of the cluster's worker threads; None: all at once) on the Dask
+    scheduler `scheduler` (an address, connected to here, or a
     `distributed.Client`, used as it is), computing ``work([task])`` (default :func:`attempt_chunk`: the runs
     themselves come back, this process writes them) on one thread of its worker (:func:`in_dask_task`) → a generator
     of (index, ok, result) as they finish.  A task whose worker was lost is rescheduled by Dask (up to its
@@ -344,6 +345,8 @@ def _dask_results(client, tasks, work=None, window=None, close=True):
             queue.add(future)
 
     with client if close else contextlib.nullcontext():
+        if callable(window):
+            window = window(sum(client.nthreads().values()))
         submit(window)
         for future in queue:
             chunk = chunk_of.pop(future.key)

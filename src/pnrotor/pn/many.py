@@ -76,6 +76,10 @@ INSPIRAL_ENDS = ("v_max", "energy_balance", "vdot_nonpositive", "vdot_peak", "vd
 STATE = ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat")
 """The fields of a :class:`Population` that hold a state (NaN where the target was not reached)."""
 
+PER_BINARY = ("m1_Msun", "m2_Msun", "chi1", "chi2", "f_ref_Hz", "ell_hat", "n_hat", "kappa1", "kappa2", "f_end_Hz",
+              "frequencies_Hz")
+"""The inputs of a :class:`Population` given per binary (its other inputs are the options all binaries share)."""
+
 
 def spin_angles(chi1, chi2, ell_hat, m1, m2):
     r"""θ₁, θ₂, φ₁₂, χ_eff and χ_p of spins ``chi1``, ``chi2`` and orbital direction ``ell_hat`` (arrays (..., 3),
@@ -622,8 +626,7 @@ integrate_rotor, precession, max_steps
                      message=np.full(nr, "", dtype=object), nsteps=np.zeros(nr, dtype=np.int64),
                      nfev=np.zeros(nr, dtype=np.int64), stopped_at={},
                      inputs={**{k: v for k, v in shared.items() if k != "sampling"},
-                             "m1_Msun": m1a, "m2_Msun": m2a, "chi1": c1, "chi2": c2, "f_ref_Hz": fref, "ell_hat": ell,
-                             "n_hat": nh, "kappa1": k1, "kappa2": k2,
+                             **dict(zip(PER_BINARY, (m1a, m2a, c1, c2, fref, ell, nh, k1, k2))),
                              ("frequencies_Hz" if listed else "f_end_Hz"): targets if listed else targets[:, 0]})
     ends, M_sec = np.full(nr, None, dtype=object), np.full(nr, np.nan)
     counts = np.zeros((nr, 4), dtype=np.int64)
