@@ -136,7 +136,10 @@ class SpinAngles:
         ``termination``, ``reached``, ``message``, ``nsteps``, ``nfev``, the derived ``theta1``, ``theta2``,
         ``phi12``, ``chi_eff``, ``chi_p``, and the states where the integrations stopped (``stopped_v`` …); the
         options every binary shares in ``DataFrame.attrs``."""
-        import pandas as pd
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("to_pandas needs pandas: pip install 'pnrotor[pandas]'") from None
 
         n, shape = len(self), self.v.shape
         columns = {}
