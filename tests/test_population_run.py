@@ -280,3 +280,24 @@ def test_the_table_is_read_as_chunks_finish(table, tmp_path, monkeypatch, jobs):
     outcome = population.run(table, tmp_path / "out.h5", chunk=2, jobs=jobs)
     assert outcome.written == 36 and len(ahead) == 20 and read[0] == 40
     assert max(ahead) <= (2 * jobs if jobs > 1 else 1) * 2 + 2, ahead
+
+
+def test_concatenate_refuses_a_source_that_differs_in_more_than_its_rows(serial, tmp_path):
+    """hdf5.concatenate takes the first source's other fields: a source whose shared options differ, or whose
+    columns have another dtype, is refused, not mixed in."""
+    table = hdf5.read(serial[1])
+    hdf5.concatenate(tmp_path / "twice.h5", [serial[1], serial[1]])
+    twice = hdf5.read(tmp_path / "twice.h5")
+    assert len(twice) == 72 and list(twice.name) == list(table.name) * 2
+    np.testing.assert_array_equal(twice.stopped_at["R"][36:], table.stopped_at["R"])
+    other = tmp_path / "other.h5"
+    hdf5.write(other, population.PopulationTable(**{**table.__dict__, "inputs": {**table.inputs, "rtol": 1e-9}}))
+    with pytest.raises(ValueError, match=r"other.h5 differs from .*serial.h5 in more than its arrays of samples"):
+        hdf5.concatenate(tmp_path / "mixed.h5", [serial[1], other])
+    with h5py.File(other, "r+") as f:
+        f["inputs"].attrs["rtol"] = 0.0
+        del f["nfev"]
+        f["nfev"] = np.zeros(36)
+    with pytest.raises(ValueError, match=r"other.h5: dataset 'nfev' is float64 \(36,\), not int64 of 36 samples"):
+        hdf5.concatenate(tmp_path / "mixed.h5", [serial[1], other])
+    assert not (tmp_path / "mixed.h5").exists()

@@ -362,10 +362,14 @@ class Batch:
 def concatenate(path, sources, *, overwrite=False, compression=None, checksum=True):
     """Write the one-run files `sources` (pnrotor files of one kind, e.g. the chunks of a population) as one run at
     `path`, atomically as `write` does, and return the path: each array of `ARRAYS` with N samples along its first
-    axis is the concatenation of the sources' in their order; every other field is the first source's and must be
-    the same in each (a ValueError otherwise).  The sources are read one at a time, as `read` reads them (checked),
-    so the memory taken is that of the largest, whatever the total.  ``compression`` and ``checksum`` as in
-    `write`."""
+    axis is the concatenation of the sources' in their order; every other field is the first source's.
+
+    The first source is read as `read` reads it (checked); each other one must hold the same kind and fields, with
+    the same values but for its arrays of samples, and those of the first's dtype and shape but for their length (a
+    ValueError naming it otherwise).  Their bytes are copied as stored, one source at a time, so the memory taken is
+    that of the largest, whatever the total (their checksums are checked as HDF5 reads them, but the layout of the
+    others is not checked again: a population's chunks were checked as they were written).  ``compression`` and
+    ``checksum`` as in `write`."""
     path, sources = Path(path), [Path(source) for source in sources]
     if not sources:
         raise ValueError("concatenate needs at least one source file")
@@ -386,27 +390,34 @@ def concatenate(path, sources, *, overwrite=False, compression=None, checksum=Tr
                     widths[name] = max(widths.get(name, 1), f[name].dtype.itemsize)
     values = _fields(first)
     for name, spec in stacked.items():
-        group, _, key = name.rpartition("/")
-        array = values[group][key] if group else values[name]
+        array = _item(values, name)
         dtype = h5py.string_dtype("utf-8", widths[name]) if spec.dtype == "str" else array.dtype
         _set(values, name, _Unwritten((sum(lengths),) + array.shape[1:], np.dtype(dtype)))
     template = type(first)(**values)
+    others = {name: value for name, value in _fields(first).items() if name not in NOT_WRITTEN and not callable(value)}
+    for name in stacked:
+        _set(others, name, None)
     _check_space(path, _run_bytes(template), compression)
-    with _replacing(path, overwrite) as f:
-        _put_run(f, template, compression, checksum)
+    with _replacing(path, overwrite) as out:
+        _put_run(out, template, compression, checksum)
         start = 0
-        for i, (source, length) in enumerate(zip(sources, lengths)):
-            values = _fields(first if i == 0 else read(source))
-            for name in stacked:
-                group, _, key = name.rpartition("/")
-                array = values[group][key] if group else values[name]
-                if array.shape[0] != length:
-                    raise ValueError(f"{source} changed while it was concatenated")
-                f[name][start:start + length] = _utf8(array, name) if stacked[name].dtype == "str" else array
-                _set(values, name, None)
-            if not _same(values, _fields(template, unset=stacked)):
-                raise ValueError(f"{source} differs from {sources[0]} in more than its arrays of samples: not "
-                                 "concatenated")
+        for source, length in zip(sources, lengths):
+            with _open(source) as f:
+                _check_metadata(f, source)
+                found = _get(f, skip=_NOT_FIELDS, leave=stacked)
+                for name in stacked:
+                    _set(found, name, None)
+                if f.attrs["kind"] != kind or not _same(found, others):
+                    raise ValueError(f"{source} differs from {sources[0]} in more than its arrays of samples: not "
+                                     "concatenated")
+                for name, spec in stacked.items():
+                    data = f[name][...]
+                    if spec.dtype == "str" and h5py.check_string_dtype(f[name].dtype) is None or \
+                            spec.dtype != "str" and data.dtype != out[name].dtype or \
+                            data.shape != (length,) + out[name].shape[1:]:
+                        raise ValueError(f"{source}: dataset {name!r} is {data.dtype} {data.shape}, not "
+                                         f"{out[name].dtype} of {length} samples as its length and {sources[0]} say")
+                    out[name][start:start + length] = data
             start += length
     return path
 
@@ -423,14 +434,16 @@ class _Unwritten(NamedTuple):
     nbytes = property(lambda self: self.size * self.itemsize)
 
 
-def _fields(run, unset=()):
-    """The fields of the run dataclass `run`, name → value, its dicts copied (and the arrays named in `unset`,
-    ``GROUP/NAME`` in a dict field, set to None)."""
+def _fields(run):
+    """The fields of the run dataclass `run`, name → value, its dicts copied."""
     values = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
-    values = {name: dict(value) if isinstance(value, dict) else value for name, value in values.items()}
-    for name in unset:
-        _set(values, name, None)
-    return values
+    return {name: dict(value) if isinstance(value, dict) else value for name, value in values.items()}
+
+
+def _item(values, name):
+    """The value ``values[name]``, or ``values[GROUP][KEY]`` for a name ``GROUP/KEY``."""
+    group, _, key = name.rpartition("/")
+    return (values[group] if group else values)[key]
 
 
 def _set(values, name, value):
@@ -1122,11 +1135,15 @@ def _value(attribute):
     return attribute.item() if isinstance(attribute, np.generic) else attribute
 
 
-def _get(g, skip=()):
+def _get(g, skip=(), leave=(), prefix=""):
+    """The attributes (but those in `skip`), datasets (but those whose path from the run is in `leave`) and subgroups
+    of group `g` (whose path from the run is `prefix`) as the values written: name → value."""
     values = {name: _value(attribute) for name, attribute in g.attrs.items() if name not in skip}
     for name, item in g.items():
         if isinstance(item, h5py.Group):
-            values[name] = _get(item)
+            values[name] = _get(item, leave=leave, prefix=f"{prefix}{name}/")
+        elif prefix + name in leave:
+            continue
         elif h5py.check_string_dtype(item.dtype) is not None:   # an array of strings (`_utf8`)
             values[name] = item.asstr()[...]
         else:
