@@ -226,3 +226,13 @@ def test_rows_evolve_refuses_fail_with_its_message(in_tmp, capsys):
                            sampling="final")
         assert f"({name}): {refused.value}" in out, name
     assert list(hdf5.read(in_tmp / "r.h5").name) == ["ok"]
+
+
+def test_a_progress_bar_of_rows_on_a_terminal_unless_quiet(in_tmp, capsys, monkeypatch):
+    import sys
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    code, _, err = evolve(capsys, "--batch", "t.csv", "--population", "-o", "a.h5")
+    assert code == 1 and "11/11" in err and "row/s" in err
+    code, _, err = evolve(capsys, "--batch", "t.csv", "--population", "-o", "b.h5", "-q")
+    assert code == 1 and err == ""
