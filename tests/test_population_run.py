@@ -3,7 +3,6 @@ Dask cluster; a run killed with SIGKILL and resumed equals an uninterrupted one 
 chunks again; a worker killed in the middle of a chunk loses no row; Parquet and HDF5 tables; memory that does not
 grow with the table (the table read as chunks finish)."""
 
-import json
 import os
 import signal
 import subprocess

@@ -116,18 +116,18 @@ class SpinAngles:
     DataFrame: shared by :class:`Population` and `pnrotor.batch.population.PopulationTable` (whose ``inputs`` hold
     ``m1_Msun`` and ``m2_Msun`` per binary)."""
 
-    def spin_angles(self):
+    def derived(self):
         """:func:`spin_angles` of the states (NaN where the target was not reached): dict of (N,) or (N, K)."""
         shape = self.v.shape
         m1, m2 = (self.inputs[key].reshape(self.inputs[key].shape + (1,) * (self.v.ndim - 1))
                   for key in ("m1_Msun", "m2_Msun"))
         return spin_angles(self.chi1, self.chi2, self.ell_hat, np.broadcast_to(m1, shape), np.broadcast_to(m2, shape))
 
-    theta1 = property(lambda self: self.spin_angles()["theta1"], doc="tilt of χ₁ from ℓ̂ (rad; :func:`spin_angles`)")
-    theta2 = property(lambda self: self.spin_angles()["theta2"], doc="tilt of χ₂ from ℓ̂ (rad; :func:`spin_angles`)")
-    phi12 = property(lambda self: self.spin_angles()["phi12"], doc="φ₁₂ (rad; :func:`spin_angles`)")
-    chi_eff = property(lambda self: self.spin_angles()["chi_eff"], doc="χ_eff (:func:`spin_angles`)")
-    chi_p = property(lambda self: self.spin_angles()["chi_p"], doc="χ_p (:func:`spin_angles`)")
+    theta1 = property(lambda self: self.derived()["theta1"], doc="tilt of χ₁ from ℓ̂ (rad; :func:`spin_angles`)")
+    theta2 = property(lambda self: self.derived()["theta2"], doc="tilt of χ₂ from ℓ̂ (rad; :func:`spin_angles`)")
+    phi12 = property(lambda self: self.derived()["phi12"], doc="φ₁₂ (rad; :func:`spin_angles`)")
+    chi_eff = property(lambda self: self.derived()["chi_eff"], doc="χ_eff (:func:`spin_angles`)")
+    chi_p = property(lambda self: self.derived()["chi_p"], doc="χ_p (:func:`spin_angles`)")
 
     def to_pandas(self):
         """A pandas DataFrame of the table, one row per binary (per binary and target with a list of frequencies:
@@ -169,7 +169,7 @@ class SpinAngles:
                 add(key + "_ref" * (value.ndim == 2), value, True)
         for key in STATE + ("termination", "reached", "message", "nsteps", "nfev"):
             add(key, getattr(self, key))
-        for key, value in self.spin_angles().items():
+        for key, value in self.derived().items():
             add(key, value)
         for key in STATE:
             add("stopped_" + key, self.stopped_at[key])
