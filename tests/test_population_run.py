@@ -194,7 +194,7 @@ def test_a_chunk_that_kills_its_worker_every_time_fails_its_rows_with_the_reason
     monkeypatch.setattr(backends, "start_method", lambda: "fork")
     outcome = population.run(table, tmp_path / "out.h5", jobs=2, chunk=CHUNK)
     lost = [row for row in outcome.failed if "worker process died" in row.error]
-    assert [row.number for row in lost] == list(range(CHUNK + 1, 2 * CHUNK + 1))
+    assert [(row.number, row.name) for row in lost] == [(i, f"b{i - 1}") for i in range(CHUNK + 1, 2 * CHUNK + 1)]
     assert lost[0].error == "its worker process died running it (killed, or out of memory?)"
     assert [row.number for row in outcome.failed if row not in lost] == [5, 16, 27, 38]
     kept = hdf5.read(tmp_path / "out.h5")

@@ -285,7 +285,10 @@ class Plan(_BatchPlan):
                 for index, ok, result in interrupted.interruptible(results):
                     records = pending.pop(index)
                     if not ok:   # a worker lost (twice for a pool): every row of the chunk fails with the reason
-                        result = Chunk(None, [_failed(*record, result) for record in records], 0.0, len(records))
+                        failed = [parse_row(*record, self.defaults) for record in records]
+                        for row in failed:
+                            row.error = result
+                        result = Chunk(None, failed, 0.0, len(records))
                     self._store(index, result)
                     done[index] = result.rows
                     evolve_seconds += result.seconds
