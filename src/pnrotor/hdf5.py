@@ -241,6 +241,20 @@ def write(path, run, *, overwrite=False, compression=None, checksum=True, group=
     return path
 
 
+def image(run, *, compression=None, checksum=True):
+    """The bytes of the file `write` would write for the run dataclass `run` (checked as it checks it), built in
+    memory: for a process that computes a run and hands it to another to store (a population's chunks)."""
+    import io
+
+    _check_run(run)
+    _check_compression(compression)
+    _check_checksum(checksum)
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w", libver=("v110", "v110")) as f:
+        _put_run(f, run, compression, checksum)
+    return buffer.getvalue()
+
+
 @contextmanager
 def batch(path, *, overwrite=False, compression=None, checksum=True, append=False, durable=True):
     """Write many runs into the batch file `path`, atomically: a context manager that yields a `Batch`.

@@ -19,8 +19,8 @@ that mode and :class:`PopulationTable`, the dataclass of its file (``kind`` = ``
   `pnrotor.batch.backends`.  A worker lost in the middle of a chunk (killed, out of memory) has its chunk computed
   again (a new pool; Dask's rescheduling), and where that fails too, the chunk's rows fail with the reason;
 * each finished chunk is on disk at once, in the folder ``OUTPUT.parts`` as for batches (`pnrotor.batch`): its
-  states as a :class:`PopulationTable` file ``chunk-K.h5`` and then ``chunk-K.json`` (its failed rows; the mark of a
-  finished chunk), both written atomically and fsynced.  A kill loses the chunks in flight only; ``resume=True``
+  states as a :class:`PopulationTable` file ``chunk-K.h5`` (encoded by the worker, `pnrotor.hdf5.image`) and then
+  ``chunk-K.json`` (its failed rows; the mark of a finished chunk), both written atomically and fsynced.  A kill loses the chunks in flight only; ``resume=True``
   (``--resume``) computes the chunks missing, after checking that the table's bytes and the options are those that
   made the others;
 * at the end the chunks are copied, one at a time, into one :class:`PopulationTable` file, the rows that succeeded
@@ -131,10 +131,12 @@ def unsupported(params):
 
 
 class Chunk(NamedTuple):
-    """What a chunk's task returns: the :class:`PopulationTable` of its rows that succeeded (None: none), its rows
-    that failed (`pnrotor.batch.table.Row` with ``error``), the seconds of its `evolve_many` calls, its rows."""
+    """What a chunk's task returns: its rows that succeeded as the bytes of a :class:`PopulationTable` file
+    (`pnrotor.hdf5.image`, encoded by the worker; None: no row) and their number, its rows that failed
+    (`pnrotor.batch.table.Row` with ``error``), the seconds of its `evolve_many` calls, its rows."""
 
-    table: PopulationTable
+    image: bytes
+    written: int
     failed: list
     seconds: float
     rows: int
@@ -165,8 +167,12 @@ def compute_chunk(chunk, defaults):
             if termination == "invalid":
                 rows[i].error = message
         parts.append((np.array(indices), result))
-    return [(index, True, Chunk(_table(rows, parts), [row for row in rows if row.error is not None], seconds,
-                                len(rows)))]
+    from pnrotor import hdf5
+
+    table = _table(rows, parts)
+    image = None if table is None else hdf5.image(table)
+    return [(index, True, Chunk(image, 0 if table is None else len(table), [row for row in rows if row.error is not None],
+                                seconds, len(rows)))]
 
 
 def _evolve(shared, params):
@@ -288,7 +294,7 @@ class Plan(_BatchPlan):
                         failed = [parse_row(*record, self.defaults) for record in records]
                         for row in failed:
                             row.error = result
-                        result = Chunk(None, failed, 0.0, len(records))
+                        result = Chunk(None, 0, failed, 0.0, len(records))
                     self._store(index, result)
                     done[index] = result.rows
                     evolve_seconds += result.seconds
@@ -337,20 +343,18 @@ class Plan(_BatchPlan):
         return self.parts / f"chunk-{index}{suffix}"
 
     def _store(self, index, chunk):
-        """Chunk ``index`` on disk: its table (if a row succeeded), then its mark (failures and count), each atomic
-        and fsynced."""
-        from pnrotor import hdf5
-
-        if chunk.table is not None:
-            hdf5.write(self._part(index, ".h5"), chunk.table, overwrite=True)
-        marker = {"rows": chunk.rows, "written": 0 if chunk.table is None else len(chunk.table),
+        """Chunk ``index`` on disk: its table (if a row succeeded), then its mark (failures and count), each written
+        under a temporary name, fsynced and renamed."""
+        marker = {"rows": chunk.rows, "written": chunk.written,
                   "failed": [[row.number, row.label, row.name, row.error] for row in chunk.failed]}
-        temporary = self._part(index, ".json.tmp")
-        with open(temporary, "w") as f:
-            json.dump(marker, f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(temporary, self._part(index, ".json"))
+        for suffix, data in ((".h5", chunk.image), (".json", json.dumps(marker).encode())):
+            if data is not None:
+                temporary = self._part(index, suffix + ".tmp")
+                with open(temporary, "wb") as f:
+                    f.write(data)
+                    f.flush()
+                    os.fsync(f.fileno())
+                os.replace(temporary, self._part(index, suffix))
 
     def _fingerprint(self):
         """What identifies the chunks a population stores: the table's bytes, the chunk size, the defaults of empty
