@@ -21,7 +21,7 @@ and the file's bytes per row.  With --memory-rows N, a table of N rows runs thro
 peak resident memory of its processes is measured (psutil, every 0.2 s).  --write-docs writes the results into the
 "Populations" section of docs/performance.md.
 
-    python benchmarks/bench_population.py [--rows 40000] [--rounds 3] [--chunks 1000,3000,10000]
+    python benchmarks/bench_population.py [--rows 40000] [--rounds 3] [--chunks 1000,3000,10000,20000]
         [--precession-rows 100] [--batch-rows 200] [--memory-rows 1000000] [--write-docs]
 """
 
@@ -123,6 +123,7 @@ def measure(args, folder):
     started, cluster = timed(lambda: distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                                               dashboard_address=None))
     times = {name: [] for name in configs}
+    load = [os.getloadavg()[0]]
     try:
         for round_ in range(args.rounds + 1):
             for name, config in configs.items():
@@ -133,10 +134,11 @@ def measure(args, folder):
                     reached = int(result.reached.sum())
     finally:
         cluster.close()
+    load.append(os.getloadavg()[0])
     results = {name: summary(times[name], rows[name]) for name in configs}
     comparison = compare_with_precession(small)
     costs = instrumented(table, folder, args.rows)
-    return {"rows": args.rows, "reached": reached, "cluster_start_s": started, "results": results,
+    return {"rows": args.rows, "reached": reached, "cluster_start_s": started, "results": results, "load": load,
             "comparison": comparison, "costs": costs, "rounds": args.rounds}
 
 
@@ -242,10 +244,12 @@ def memory(rows, jobs, folder):
 
 def report(found, mem):
     """The results as lines of Markdown (printed, and written into docs/performance.md with --write-docs)."""
-    lines = [f"Measured by `benchmarks/bench_population.py` ({os.cpu_count()} cores, numba threads "
-             f"{numba.get_num_threads()}, Python {sys.version.split()[0]}, {found['rounds']} interleaved rounds after "
-             f"a warm-up, medians and ranges), {found['rows']:,} precessing binaries of 40 M☉ from 20 to 100 Hz "
-             f"({found['reached']:,} reach 100 Hz; the others end first: NaN states, `reached` False).", "",
+    lines = [f"Measured by `python benchmarks/bench_population.py {' '.join(sys.argv[1:])}` ({os.cpu_count()} cores, "
+             f"numba threads {numba.get_num_threads()}, Python {sys.version.split()[0]}, load average "
+             f"{found['load'][0]:.1f} at the start and {found['load'][1]:.1f} at the end of the rounds; "
+             f"{found['rounds']} interleaved rounds after a warm-up, medians and ranges), {found['rows']:,} precessing "
+             f"binaries of 40 M☉ from 20 to 100 Hz ({found['reached']:,} reach 100 Hz; the others end first: NaN "
+             "states, `reached` False).", "",
              "| configuration | rows | median s (range) | rows/s | / one evolve_many |", "|---|---|---|---|---|"]
     base = found["results"]["evolve_many (one call, arrays)"][1]
     for name, (median, rate, spread) in found["results"].items():
@@ -273,10 +277,10 @@ def report(found, mem):
     c = found["costs"]
     lines += ["", "Costs of one run in this process on one thread (what the projection uses): the worker's "
               f"{c['compute_row_s'] * 1e6:.0f} µs per row ({c['evolve_row_s'] * 1e6:.0f} in `evolve_many`, the rest "
-              f"parsing and checking the rows); the parent's {c['read_row_s'] * 1e6:.1f} µs per row to read the "
-              f"table, {c['store_chunk_s']:.3f} s to store a chunk of {population.CHUNK:,} rows (HDF5 and its mark, "
-              f"fsynced) and {c['assemble_chunk_s']:.3f} s to copy it into the file; {c['bytes_per_row']:.0f} bytes "
-              "per row in the file (uncompressed).", "",
+              f"parsing and checking the rows and encoding the chunk's HDF5 file); the parent's "
+              f"{c['read_row_s'] * 1e6:.1f} µs per row to read the table, {c['store_chunk_s']:.3f} s to write a chunk "
+              f"of {population.CHUNK:,} rows (its file and its mark, fsynced) and {c['assemble_chunk_s']:.3f} s to "
+              f"copy it into the final file; {c['bytes_per_row']:.0f} bytes per row in that file (uncompressed).", "",
               "Projection (machines of 2 cores like this one; the workers' time unless the single parent, which "
               "reads the table and stores each chunk, is slower, plus the assembly at the end; not measured: the "
               "network of a real cluster, which carries ~0.3 kB per row each way, and its scheduler):", "",
@@ -313,7 +317,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rows", type=int, default=40_000)
     parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--chunks", default=f"1000,3000,{population.CHUNK}",
+    parser.add_argument("--chunks", default=f"1000,3000,{population.CHUNK},20000",
                         help="chunk sizes of the jobs=2 runs, comma-separated")
     parser.add_argument("--precession-rows", type=int, default=100)
     parser.add_argument("--batch-rows", type=int, default=200)
