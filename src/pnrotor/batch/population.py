@@ -361,7 +361,7 @@ class Plan(_BatchPlan):
         cells, the storage options."""
         import hashlib
 
-        text = (f"table {self.table.digest()}\nchunk {self.chunk}\ndefaults {sorted(self.defaults.items())!r}\n"
+        text = (f"table {self.table.digest}\nchunk {self.chunk}\ndefaults {sorted(self.defaults.items())!r}\n"
                 f"storage {sorted(self.storage.items())!r}")
         return hashlib.sha256(text.encode()).hexdigest() + "\n"
 

@@ -11,6 +11,7 @@ Problems of the file itself (missing, unreadable, unknown or missing columns, re
 """
 
 import contextlib
+import functools
 import math
 from pathlib import Path
 
@@ -156,7 +157,7 @@ class TableFile:
     strings; NaN and empty strings are empty cells, as HDF5 has no null).
 
     Opening it checks its structure (the columns, and each CSV line's fields) and counts its rows, :attr:`rows`;
-    :meth:`records` then yields (number, label, record) row by row, reading a piece at a time; :meth:`digest` is
+    :meth:`records` then yields (number, label, record) row by row, reading a piece at a time; :attr:`digest` is
     the SHA-256 of its bytes.  A bad value is the business of :func:`parse_row` (its row only)."""
 
     SUFFIXES = (".csv", ".toml", ".parquet", ".h5", ".hdf5")
@@ -199,8 +200,9 @@ class TableFile:
         for number, (label, record) in enumerate(records, 1):
             yield number, label or f"row {number}", record
 
+    @functools.cached_property
     def digest(self):
-        """The SHA-256 of the file's bytes, in hex."""
+        """The SHA-256 of the file's bytes, in hex (read once)."""
         import hashlib
 
         sha = hashlib.sha256()
