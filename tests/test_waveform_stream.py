@@ -184,7 +184,7 @@ def test_results_too_large_for_memory_name_the_streaming_write(monkeypatch):
     (lambda b: pnrotor.polarizations(*b, distance=1.0, delta_t=DT), TypeError, "inclination"),
     (lambda b: pnrotor.stream(*b, delta_t=DT).polarizations(inclination=0.1, distance=None), ValueError,
      "distance is required"),
-    (lambda b: pnrotor.modes(*b, delta_t=DT, amplitude_order=4), ValueError, "amplitude_order must be one of"),
+    (lambda b: pnrotor.modes(*b, delta_t=DT, amplitude_order=4.5), ValueError, "amplitude_order must be one of"),
 ])
 def test_bad_arguments_name_themselves(call, error, message):
     with pytest.raises(error, match=message):
