@@ -98,18 +98,22 @@ def test_tides_and_memory_stream_as_the_evolutions():
     assert np.max(np.abs(hp - php)) < 1e-13 * peak and np.max(np.abs(hc - phc)) < 1e-13 * peak
 
 
-def test_thread_count_does_not_change_the_numbers():
-    """Polarizations and modes on one thread and on the machine's: bitwise the same (each sample by the same code)."""
+def test_thread_count_does_not_change_the_numbers(monkeypatch):
+    """Polarizations and modes on one thread and in parts on three: bitwise the same (each sample by the same
+    code)."""
     m1, m2, chi1, chi2, f_ref, options = CASES["NSBH"]
     stream = pnrotor.stream(m1, m2, chi1, chi2, f_ref, delta_t=DT, **options)
     wave = (stream.polarizations(inclination=0.4, distance=50.0), stream.modes(5, 2.5))
-    assert len(threads.parts(len(stream), S.MIN_PART, S._CHUNK)) == min(2, threads.thread_count())
+    handed = []
+    run = threads.run
+    monkeypatch.setattr(threads, "run", lambda kernel, ranges: (handed.append(len(ranges)), run(kernel, ranges)))
+    monkeypatch.setattr(threads, "thread_count", lambda: 3)
+    monkeypatch.setattr(threads, "PART_SECONDS", 0.0)   # parts of any length
     many = [w.compute() for w in wave]
-    threads.limit(1)
-    try:
-        one = [w.compute() for w in wave]
-    finally:
-        threads.limit(None)
+    assert handed == [3, 3]
+    monkeypatch.setattr(threads, "thread_count", lambda: 1)
+    one = [w.compute() for w in wave]
+    assert handed[2:] == [1, 1]
     np.testing.assert_array_equal(one[0].h_plus, many[0].h_plus)
     np.testing.assert_array_equal(one[0].h_cross, many[0].h_cross)
     np.testing.assert_array_equal(one[1].data, many[1].data)
