@@ -213,6 +213,8 @@ class Stream:
         *terms, first, rows, coefs = _amp.kernel_terms(s.m1, s.m2, ell_max, order2, s.kappa1, s.kappa2,
                                                        inputs["spin_content"] != "nonspinning", constant, tides,
                                                        memory)
+        if not np.any(terms[10] > _amp._Q_LOG):   # no term of a spin quantity (kernel_terms' q) at this order: the
+            spins = 0                            # spins are not taken into the orbital frame per sample
         Rn, weights = _NONE, _NONE
         if direction is not None and frame == "z":
             weights = _harmonics(*direction, ell_max, *terms[7:9])   # kernel_terms' ell_start, target
@@ -415,7 +417,8 @@ def _waves(mode, fwd_t, fwd_h, fwd_c, back_t, back_h, back_c, n_back, k_lo, dt, 
     :func:`pnrotor.waveform.amplitudes._sum`'s (spins 0 or 2, frame, and
     :func:`~pnrotor.waveform.amplitudes.kernel_terms`)."""
     B = _CHUNK
-    n_rows = 0 if mode == MODE_ALIGNED else B   # an aligned run's spins and ℓ̂ are constant: no rows
+    n_rows = 0 if mode == MODE_ALIGNED or spins == 0 else B   # an aligned run's spins and ℓ̂ are constant, and
+    # without spin terms neither is used: no rows (the states then have v, Φ and R alone)
     tq = np.empty(B)
     v_b, Phi_b, R_b, F_b = np.empty(B), np.empty(B), np.empty((B, 4)), np.empty((B, 4))
     chi1_b, chi2_b, ell_b = np.empty((n_rows, 3)), np.empty((n_rows, 3)), np.empty((n_rows, 3))
