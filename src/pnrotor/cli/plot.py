@@ -10,8 +10,8 @@ rotor, on a log scale, with its maximum. Waveform modes (``pnrotor evolve --mode
 |h_ℓm|(t) of the modes m ≥ 0 that reach 1e-3 of max |h₂₂|, and h₊, h× seen from ``--inclination`` and
 ``--phi-ref``; stored polarizations (``--polarizations``): h₊, h× against t in seconds. A file of
 ``pnrotor evolve --modes`` (groups ``run``, ``modes``) is drawn whole without ``--group``. Times are in M with
-seconds on a second axis, and v(t) has the GW frequency f = v³/(π M) beside it. Lines of more than `MAX_POINTS` samples are drawn from every k-th sample (δ: the largest
-of each k samples), and the panel says so.
+seconds on a second axis, and v(t) has the GW frequency f = v³/(π M) beside it. Lines of more than
+`MAX_POINTS` samples are drawn from every k-th sample (δ: the largest of each k samples), and the panel says so.
 
 numpy, h5py, matplotlib and pnrotor's numba code are imported only when the command runs, so that the CLI
 starts quickly.
