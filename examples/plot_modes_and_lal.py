@@ -18,6 +18,7 @@ binary = dict(m1=30, m2=10, chi1=(0.6, 0, 0.2), chi2=(0, -0.4, 0.1), f_ref=20)
 run = pnrotor.evolve(**binary, sampling=1 / 4096)
 h = pnrotor.modes(run, ell_max=4, distance=400)
 coprecessing = h.in_frame("coprecessing")
+M = run.inputs["M_seconds"]     # G M / c³ in seconds
 
 fig, (inertial_axes, coprecessing_axes, polarization_axes) = plt.subplots(3, 1, figsize=(10, 10),
                                                                             layout="constrained")
@@ -26,6 +27,7 @@ for axes, modes, frame in ((inertial_axes, h, "inertial"), (coprecessing_axes, c
         axes.semilogy(h.t_seconds, np.abs(modes.mode(ell, m)), lw=0.8, label=f"({ell},{m})")
     axes.set(xlabel="t [s]", ylabel="|h_ℓm| (strain at 400 Mpc)", title=f"{frame} frame", ylim=(1e-25, 1e-20))
     axes.legend(ncol=5, loc="lower right")
+    axes.secondary_xaxis("top", functions=(lambda s: s / M, lambda t: t * M)).set_xlabel("t [M]")
 
 keywords = dict(mass1=30, mass2=10, spin1x=0.6, spin1z=0.2, spin2y=-0.4, spin2z=0.1, f_lower=20, delta_t=1 / 4096,
                 inclination=0.7, distance=400, amplitude_order=0, spin_order=6)

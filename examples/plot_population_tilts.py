@@ -35,7 +35,7 @@ tilts.plot([0, 180], [0, 180], color="0.5", lw=0.8)
 tilts.set(xlabel="θ₁ at 20 Hz [deg]", ylabel="θ₁ at the end of the inspiral [deg]", title="tilt of χ₁ from ℓ̂")
 fig.colorbar(points, ax=tilts, label="m₁ / m₂")
 M = (m1 + m2) * MTSUN_SI                 # G M / c³ in seconds
-frequencies.hist(end.v ** 3 / (np.pi * M), bins=40)       # f_GW = v³ / (π M)
+frequencies.hist(end.v ** 3 / (np.pi * M), bins=np.geomspace(50, 5000, 41))   # f_GW = v³ / (π M)
 frequencies.set(xlabel="GW frequency at the end [Hz]", ylabel="binaries", xscale="log",
-                title="where the inspirals end (PN energy balance)")
+                title="where the inspirals end (`termination` says why)")
 plt.show()
