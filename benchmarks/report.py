@@ -37,13 +37,12 @@ class Section:
 
 SECTIONS = {
     "bench_ode.py": Section("The integrator: pnrotor's DOP853 against scipy's", ("--quick", "--no-cold"), "~2 min"),
-    "bench_pn.py": Section("PN orbits against LALSuite's SpinTaylorT4", ("--rounds", "5", "--no-compile", "--no-options"),
-                           "~2 min"),
-    "bench_latency.py": Section("The Python around one evolve call", ("--calls", "500"), "~1 min"),
+    "bench_pn.py": Section("PN orbits against LALSuite's SpinTaylorT4", ("--no-compile",), "~3 min"),
+    "bench_latency.py": Section("The Python around one evolve call", (), "~1 min"),
     "bench_result_checks.py": Section("What the result types' checks cost", ("--rounds", "7"), "~1 min"),
-    "bench_modes.py": Section("Modes against LALSuite's SpinTaylorT4 modes", ("--rounds", "3"), "~3 min"),
-    "bench_many.py": Section("Populations in one call: evolve_many against LALSuite", ("--n", "1000", "--rounds", "3",
-                                                                                       "--lal-n", "100"), "~3 min"),
+    "bench_formulations.py": Section("The verification mode: one evaluation of ω in each formulation", (), "~2 min"),
+    "bench_modes.py": Section("Modes against LALSuite's SpinTaylorT4 modes", (), "~5 min"),
+    "bench_many.py": Section("Populations in one call: evolve_many against LALSuite", (), "~5 min"),
     "bench_pn_precision.py": Section("PN work–precision against LALSuite and scipy", ("--quick",), "~10 min"),
     "bench_hdf5.py": Section("HDF5 files: writing and reading against computing", ("--typical-only",), "~5 min"),
     "bench_pipelines.py": Section("Analysis pipelines: PyCBC and gwsignal against LAL's SpinTaylorT4",
