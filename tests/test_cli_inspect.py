@@ -359,3 +359,18 @@ def test_plot_and_inspect_show_a_run_with_its_modes_without_options(tmp_path, ca
     out = inspect_output(capsys, tmp_path / "w.h5")
     assert f"{tmp_path / 'w.h5'} run 'run': Evolution\n" in out and f"{tmp_path / 'w.h5'} run 'modes': Modes\n" in out
     assert out.count("summary\n") == 2 and "12 modes, l = 2 ... 3" in out and "batch file" not in out
+
+
+def test_plot_prints_the_coarse_sampling_warning_on_one_line(tmp_path, capsys):
+    """The modes of a run sampled at its steps draw coarse polarizations: pnrotor plot says so in one line, as
+    pnrotor evolve does (it printed Python's warning with its source line)."""
+    pytest.importorskip("matplotlib")
+    import pnrotor
+    run = pnrotor.evolve(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 100.0)
+    with hdf5.batch(tmp_path / "w.h5") as groups:
+        groups.add("run", run)
+        groups.add("modes", pnrotor.modes(run, ell_max=2))
+    assert main(["plot", str(tmp_path / "w.h5")]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("pnrotor plot: warning: polarizations of a run sampled at sampling='steps' are coarse")
+    assert err.count("\n") == 1

@@ -17,6 +17,8 @@ numpy, h5py, matplotlib and pnrotor's numba code are imported only when the comm
 starts quickly.
 """
 
+import sys
+import warnings
 from pathlib import Path
 
 from pnrotor.cli import UsageError
@@ -64,8 +66,12 @@ def run(args):
     figure.suptitle(f"{title}: " + ", ".join(f"{type(result).__name__}" + (f" ({group})" if len(results) > 1 else "")
                                              for group, result in results))
     panels = figure.subfigures(len(results), 1, height_ratios=heights) if len(results) > 1 else [figure]
-    for panel, (_, result) in zip(panels, results):
-        _draw(panel, result, args)
+    with warnings.catch_warnings(record=True) as caught:   # each on one line, as pnrotor evolve prints them
+        warnings.simplefilter("always")
+        for panel, (_, result) in zip(panels, results):
+            _draw(panel, result, args)
+    for warning in caught:
+        print(f"pnrotor plot: warning: {warning.message}", file=sys.stderr)
     with replaced_on_success(output) as temporary:
         figure.savefig(temporary, dpi=100)
     print(f"wrote {output}")
