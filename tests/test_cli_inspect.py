@@ -366,7 +366,7 @@ def test_plot_prints_the_coarse_sampling_warning_on_one_line(tmp_path, capsys):
     pnrotor evolve does (it printed Python's warning with its source line)."""
     pytest.importorskip("matplotlib")
     import pnrotor
-    run = pnrotor.evolve(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 100.0)
+    run = pnrotor.evolve(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 20.0)   # steps of > pi/2
     with hdf5.batch(tmp_path / "w.h5") as groups:
         groups.add("run", run)
         groups.add("modes", pnrotor.modes(run, ell_max=2))
