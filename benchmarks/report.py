@@ -36,15 +36,15 @@ class Section:
 
 
 SECTIONS = {
-    "bench_ode.py": Section("The integrator: pnrotor's DOP853 against scipy's", ("--quick", "--no-cold"), "~2 min"),
-    "bench_pn.py": Section("PN orbits against LALSuite's SpinTaylorT4", ("--no-compile",), "~3 min"),
+    "bench_ode.py": Section("The integrator: pnrotor's DOP853 against scipy's", ("--quick", "--no-cold"), "~1 min"),
+    "bench_pn.py": Section("PN orbits against LALSuite's SpinTaylorT4", ("--no-compile",), "~1 min"),
     "bench_latency.py": Section("The Python around one evolve call", (), "~1 min"),
     "bench_result_checks.py": Section("What the result types' checks cost", ("--rounds", "7"), "~1 min"),
-    "bench_formulations.py": Section("The verification mode: one evaluation of ω in each formulation", (), "~2 min"),
-    "bench_modes.py": Section("Modes against LALSuite's SpinTaylorT4 modes", (), "~5 min"),
-    "bench_many.py": Section("Populations in one call: evolve_many against LALSuite", (), "~5 min"),
-    "bench_pn_precision.py": Section("PN work–precision against LALSuite and scipy", ("--quick",), "~10 min"),
-    "bench_hdf5.py": Section("HDF5 files: writing and reading against computing", ("--typical-only",), "~5 min"),
+    "bench_formulations.py": Section("The verification mode: one evaluation of ω in each formulation", (), "~1 min"),
+    "bench_modes.py": Section("Modes against LALSuite's SpinTaylorT4 modes", (), "~2 min"),
+    "bench_many.py": Section("Populations in one call: evolve_many against LALSuite", (), "~2 min"),
+    "bench_pn_precision.py": Section("PN work–precision against LALSuite and scipy", ("--quick",), "~1 min"),
+    "bench_hdf5.py": Section("HDF5 files: writing and reading against computing", ("--typical-only",), "~1 min"),
     "bench_pipelines.py": Section("Analysis pipelines: PyCBC and gwsignal against LAL's SpinTaylorT4",
                                   ("--rounds", "9"), "~20 min"),
     "bench_long.py": Section("Long signals: pnrotor.polarizations against LALSuite", ("--rounds", "3"), "~30 min"),
@@ -54,8 +54,8 @@ SECTIONS = {
     "bench_cold_start.py": Section("Cold start: the first run's compile", ("--repeat", "2"), "~10 min"),
     "bench_compile.py": Section("Where a cold start's compile time goes", (), "~10 min"),
 }
-"""Each benchmark run by this script → its section's title, the arguments it runs with, and about how long that takes
-on a 2-core machine."""
+"""Each benchmark run by this script → its section's title, the arguments it runs with, and about how long that took
+on a 2-core machine at load ~3 (the long ones: estimates)."""
 
 VERSIONS = ("numpy", "scipy", "numba", "h5py", "lalsuite", "pycbc", "matplotlib")
 
