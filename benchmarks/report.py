@@ -76,8 +76,8 @@ def machine():
             pass
     commit = subprocess.run(["git", "-C", str(HERE), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip() or "unknown"
-    dirty = subprocess.run(["git", "-C", str(HERE), "status", "--porcelain", "--untracked-files=no"],
-                           capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(["git", "-C", str(HERE.parent), "status", "--porcelain", "--untracked-files=no", "--", "src",
+                            "benchmarks"], capture_output=True, text=True).stdout.strip()   # the code, not the docs
     load = ", ".join(f"{x:.1f}" for x in os.getloadavg())
     return (f"{model}, {os.cpu_count()} cores, load average {load} at the start; Python {platform.python_version()}, "
             f"{', '.join(versions)}; pnrotor at {commit}{' with local changes' if dirty else ''}")
