@@ -51,7 +51,7 @@ SECTIONS = {
     "bench_batch.py": Section("Batches on local processes", (), "~6 min"),
     "bench_population.py": Section("Populations", ("--rows", "40000", "--rounds", "3", "--memory-rows", "1000000"),
                                    "~40 min", markdown=True),
-    "bench_cold_start.py": Section("Cold start: the first run's compile", ("--repeat", "2"), "~10 min"),
+    "bench_cold_start.py": Section("Cold start: the first run's compile", ("--repeat", "2"), "~5 min"),
     "bench_compile.py": Section("Where a cold start's compile time goes", (), "~10 min"),
 }
 """Each benchmark run by this script → its section's title, the arguments it runs with, and about how long that took
