@@ -7,6 +7,7 @@ import shlex
 from pathlib import Path
 
 import pytest
+from helpers import needs
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
@@ -20,6 +21,7 @@ def test_readme_is_short():
     assert len(README.splitlines()) <= 200  # a user guide's entry, not a log (#34)
 
 
+@needs("distributed", "pycbc")   # the Dask batch and the PyCBC examples
 def test_every_python_example_runs(tmp_path, monkeypatch):
     examples = blocks("python")
     assert len(examples) >= 7  # evolve, modes, verify, population, Dask batch, h5py, PyCBC
