@@ -34,7 +34,8 @@ from pnrotor.history import short_repr
 
 __all__ = ["PopulationTable", "Plan", "plan", "run", "unsupported", "SHARED"]
 
-SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order")
+SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order",
+          "horizon_absorption")
 """The table's columns that `evolve_many` takes as shared by all its binaries: one call per combination."""
 
 FIELDS = ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat", "termination", "message", "nsteps", "nfev")
@@ -54,7 +55,8 @@ class PopulationTable:
     inputs : dict — per row (arrays of N): ``row`` (its number in the table, from 1), ``m1_Msun``,
         ``m2_Msun``, ``chi1``, ``chi2`` (at f_ref), ``f_ref_Hz``, ``f_min_Hz``, ``f_max_Hz`` (NaN where absent),
         ``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order`` (NaN: evolve's default),
-        ``precession``, ``atol``, ``lambda1``, ``lambda2``, ``tidal_order`` (NaN: evolve's default); and the options
+        ``precession``, ``atol``, ``lambda1``, ``lambda2``, ``tidal_order`` (NaN: evolve's default),
+        ``horizon_absorption`` (bool); and the options
         every row shares (``rtol``, ``rotor``, ...), as
         `Population.inputs` has them
     """
@@ -190,6 +192,7 @@ class Plan:
             "precession": _strings(row.params["precession"] for row in rows), "atol": _floats(rows, "atol"),
             "lambda1": _floats(rows, "lambda1"), "lambda2": _floats(rows, "lambda2"),
             "tidal_order": _floats(rows, "tidal_order", nan),
+            "horizon_absorption": np.array([row.params["horizon_absorption"] for row in rows], dtype=bool),
         }
         common = {key: value for key, value in parts[0][1].inputs.items() if key not in SHARED}
         return PopulationTable(name=_strings(row.name for row in rows), **columns,

@@ -360,7 +360,7 @@ def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_
                 n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, approximant="T4", pn_order=3.5,
                 spin_orbit_order=None, spin_spin_order=None, atol=1e-12, rtol=0.0, rotor="coprecessing",
                 precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000,
-                lambda1=0.0, lambda2=0.0, tidal_order=None):
+                lambda1=0.0, lambda2=0.0, tidal_order=None, horizon_absorption=False):
     r"""Evolve N binaries from f_ref → :class:`Population` of their states at the end of the inspiral, at
     f_end or at a list of frequencies (module docstring).
 
@@ -388,8 +388,10 @@ def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_
     lambda1, lambda2 : array_like (N,) or scalar
         Dimensionless tidal deformabilities Λᵢ (0 for black holes).
     approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, rotor, precession_phase_shift, \
-integrate_rotor, precession, max_steps, tidal_order
-        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
+integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
+        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries (with ``horizon_absorption`` every binary
+        is on the precessing state, its spins at the state's frequency changed by what the horizons absorbed; the
+        masses it leaves are not kept).
 
     The number of threads is :func:`pnrotor.threads.thread_count`'s (numba's: ``numba.set_num_threads``,
     ``NUMBA_NUM_THREADS``; at most :func:`pnrotor.threads.limit`'s).  Invalid shared
@@ -410,7 +412,8 @@ integrate_rotor, precession, max_steps, tidal_order
     shared = dict(approximant=approximant, pn_order=pn_order, spin_orbit_order=spin_orbit_order,
                   spin_spin_order=spin_spin_order, atol=atol, rtol=rtol, sampling="final", rotor=rotor,
                   precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
-                  precession=precession, max_steps=max_steps, tidal_order=tidal_order)
+                  precession=precession, max_steps=max_steps, tidal_order=tidal_order,
+                  horizon_absorption=horizon_absorption)
     # the shared options fail for every binary alike: check them once (a binary of the table could itself be
     # invalid, which must not raise); a reference binary carries them to population_parts
     opts = options(**shared)
