@@ -344,7 +344,7 @@ import os, sys, time
 from pnrotor.batch import backends
 backends.evolve_row = lambda params: time.sleep(120)
 results = backends.results_pool([(i, {}) for i in range(4)], 2, context=sys.argv[1], chunksize=1)
-print(" ".join(str(p.pid) for p in results.gi_frame.f_locals["first"][0]._processes.values()), flush=True)
+print(" ".join(str(p.pid) for p in results.gi_frame.f_locals["pool"]._processes.values()), flush=True)
 next(results)
 """
 

@@ -605,7 +605,7 @@ def test_modes_defaults_are_those_of_pnrotor_modes():
 
     from pnrotor.cli import evolve as cli_evolve
     from pnrotor.waveform import modes, stream
-    for function in (modes._modes_of_run, stream.modes, stream.polarizations, stream.Stream.modes,
+    for function in (modes.modes, stream._binary_modes, stream.polarizations, stream.Stream.modes,
                      stream.Stream.polarizations):
         defaults = inspect.signature(function).parameters
         assert (cli_evolve.ELL_MAX, cli_evolve.AMPLITUDE_ORDER) == (defaults["ell_max"].default,

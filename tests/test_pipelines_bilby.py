@@ -96,9 +96,57 @@ def test_optimal_snr_equals_pycbcs_sigma(injection):
 def test_generator_pickles_as_bilby_pipe_stores_it(injection):
     wg, _ = injection
     copy = pickle.loads(pickle.dumps(wg))
-    assert repr(copy.generator) == repr(wg.generator) == "PNRotorGenerator('T4', amplitude_order=0, phase_order=-1, spin_order=-1)"
+    assert repr(copy.generator) == repr(wg.generator) == ("PNRotorGenerator('T4', amplitude_order=0, phase_order=-1, "
+                                                          "spin_order=-1, tidal_order=-1)")
     a, b = wg.frequency_domain_strain(TRUTH)["plus"], copy.frequency_domain_strain(dict(TRUTH))["plus"]
     assert np.array_equal(a, b)
+
+
+def test_tides_are_bilbys_lambda_1_lambda_2_as_for_lals_spintaylor_t4():
+    """bilby's binary-neutron-star parameters lambda_1, lambda_2 (``tidal=True``) are LAL's lambda1, lambda2: a tidal
+    BNS through PNRotorWaveformGenerator matches LAL's SpinTaylorT4 through bilby's GWSignalWaveformGenerator (its
+    amplitude order 1.5PN, so pn_amplitude_order 3 here, which starts both at 2/5 of minimum_frequency; conditioned
+    by gwsignal's routines as pnrotor's) to 1e-5, and not without the tides; pn_tidal_order = 0 leaves them out; a
+    negative deformability is gwsignal's input domain error."""
+    from lalsimulation.gwsignal.core.waveform import LALCompactBinaryCoalescenceGenerator
+    from pycbc.filter import match
+    from pycbc.psd import aLIGOZeroDetHighPower
+    from pycbc.types import FrequencySeries
+
+    from pnrotor.interop.bilby import PNRotorWaveformGenerator
+
+    class ConditionedByGwsignal(LALCompactBinaryCoalescenceGenerator):
+        @property
+        def metadata(self):
+            return dict(super().metadata, conditioning_routines="gwsignal")
+
+    class LALWaveformGenerator(bilby.gw.waveform_generator.GWSignalWaveformGenerator):
+        def _create_generator(self, waveform_approximant=None):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return ConditionedByGwsignal("SpinTaylorT4")
+
+    truth = dict(mass_1=1.4, mass_2=1.3, a_1=0.03, tilt_1=0.8, phi_12=1.0, a_2=0.04, tilt_2=2.0, phi_jl=0.5,
+                 theta_jn=0.7, phase=0.4, luminosity_distance=100.0, lambda_1=400.0, lambda_2=600.0)
+
+    def strain(cls, approximant, parameters, **arguments):
+        waveform_arguments = dict(waveform_approximant=approximant, reference_frequency=50.0, minimum_frequency=100.0,
+                                  pn_amplitude_order=3, pn_spin_order=6, **arguments)
+        return cls(duration=64.0, sampling_frequency=RATE, waveform_arguments=waveform_arguments,
+                   tidal=True).frequency_domain_strain(parameters)
+
+    lal = strain(LALWaveformGenerator, "SpinTaylorT4", truth)
+    ours, untidal = (strain(PNRotorWaveformGenerator, "PNRotorT4", dict(truth, **change)) for change in
+                     ({}, {"lambda_1": 0.0, "lambda_2": 0.0}))
+    psd = aLIGOZeroDetHighPower(len(lal["plus"]), 1.0 / 64.0, 40.0)
+    for key in ("plus", "cross"):
+        a, b, c = (FrequencySeries(x[key], delta_f=1.0 / 64.0) for x in (ours, lal, untidal))
+        assert match(a, b, psd=psd, low_frequency_cutoff=40.0)[0] > 1 - 1e-5
+        assert match(c, b, psd=psd, low_frequency_cutoff=40.0)[0] < 0.999
+    left_out = strain(PNRotorWaveformGenerator, "PNRotorT4", truth, pn_tidal_order=0)
+    assert np.array_equal(left_out["plus"], untidal["plus"])
+    with pytest.raises(ValueError, match=r"^Input domain error: lambda1 must be a finite number >= 0"):
+        strain(PNRotorWaveformGenerator, "PNRotorT4", dict(truth, lambda_1=-5.0))
 
 
 @pytest.mark.parametrize("change, message", [   # (spins above 1 fail in bilby's conversion to LAL's, before)

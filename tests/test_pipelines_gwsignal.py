@@ -137,6 +137,9 @@ BAD = {   # parameter changes → what pnrotor's message says
     "eccentricity": ({"eccentricity": 0.1 * u.dimensionless_unscaled}, "eccentricity = 0.1"),
     "other mass parameters": ({"chirp_mass": 10 * u.solMass}, "not chirp_mass"),
     "unknown option": ({"ellmax": 3}, "unknown option(s) 'ellmax'"),
+    "negative deformability": ({"lambda2": -1.0 * u.dimensionless_unscaled}, "lambda2 must be a finite number >= 0"),
+    "tidal order": ({"tidal_order": 5}, "tidal_order must be -1 (all: 5PN and 6PN), 12 (6PN), 10 (5PN) or 0"),
+    "octupolar tides": ({"TidalOctupolarLambda1": 10 * u.dimensionless_unscaled}, "not TidalOctupolarLambda1"),
 }
 
 

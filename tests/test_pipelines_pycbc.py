@@ -70,6 +70,20 @@ def test_matches_spintaylor_t4_at_its_highest_amplitude_order(case):
     assert max(mp, mc) < 1e-5, (mp, mc)
 
 
+@pytest.mark.parametrize("tidal_order", [10, 0])
+def test_tidal_order_is_lals_tide_o(tidal_order):
+    """LAL's tideO: 10 keeps the 5PN tidal terms alone, 0 none (−1, all, in the cases above); against SpinTaylorT4
+    with the same tidal_order, each far from the waveform with all the tidal terms."""
+    dp, mp, dc, mc = differences("BNS-tidal", amplitude_order=0, tidal_order=tidal_order)
+    assert max(dp, dc) < 1e-4, (dp, dc)
+    assert max(mp, mc) < 1e-5, (mp, mc)
+    kw = keywords("BNS-tidal", amplitude_order=0)
+    given, every = (waveform.get_td_waveform(approximant="PNRotorT4", **kw, tidal_order=k)[0].numpy() for k in
+                    (tidal_order, -1))
+    n = min(len(given), len(every))
+    assert np.max(np.abs(given[-n:] - every[-n:])) > 1e-2 * np.max(np.abs(every))
+
+
 def test_dquad_mon_is_lals_quadparam_minus_1():
     """LAL's SpinTaylor evolves with quadparam = 1 + dQuadMon (its ChooseTDWaveform refuses dQuadMon for them, as a
     testing-GR parameter): PyCBC's dquad_mon1,2 are pnrotor's κ₁,₂ − 1 (κ checked against LAL's orbit in
@@ -178,7 +192,10 @@ BAD = {   # keyword changes → what pnrotor's message names
     "nan inclination": ({"inclination": float("nan")}, "inclination must be a finite angle"),
     "amplitude order": ({"amplitude_order": 9}, "amplitude_order must be -1"),
     "eccentricity": ({"eccentricity": 0.1}, "eccentricity = 0.1: PNRotorT4 does not model it"),
-    "tides": ({"lambda1": 400.0}, "lambda1 = 400.0: PNRotorT4 does not model it"),
+    "negative deformability": ({"lambda1": -400.0}, "lambda1 must be a finite number >= 0"),
+    "nan deformability": ({"lambda2": float("nan")}, "lambda2 must be a finite number >= 0"),
+    "tidal order": ({"tidal_order": 13}, "tidal_order must be -1 (all: 5PN and 6PN), 12 (6PN), 10 (5PN) or 0"),
+    "octupolar tides": ({"lambda_octu1": 100.0}, "lambda_octu1 = 100.0: PNRotorT4 does not model it"),
     "testing GR": ({"dchi2": 0.1}, "dchi2 = 0.1"),
     "mode array": ({"mode_array": [(2, 2)]}, "mode_array = [(2, 2)]: PNRotorT4 does not model it"),
     "frame axis J": ({"frame_axis": 1}, "frame_axis = 1"),

@@ -39,14 +39,31 @@ def _single_end(i, m1, m2, c1, c2, ell, nh, f_ref, f_end, options):
     return e.t[-1], [getattr(e, k)[-1] for k in FIELDS], e.termination, e.stats["nfev"]
 
 
+ENDS = {"v_max", "energy_balance", "vdot_nonpositive", "vdot_peak", "vdot_divergent"}
+"""The terminations that end an inspiral (the others stop it early: max_steps, nonfinite, ...)."""
+
+
+def _assert_same_state(pop, at, single, target):
+    """Entry ``at`` of pop against a single run's (t, state, termination) where that run stopped: bitwise in
+    ``stopped_at``; in the state fields too where the target was reached (termination f_max or f_min for a target
+    frequency, an end of the inspiral without one), all NaN where it was not."""
+    t, state, term = single[:3]
+    reached = term in ("f_max", "f_min") if target is not None and not math.isnan(target) else term in ENDS
+    assert pop.termination[at] == term and pop.reached[at] == reached and pop.stopped_at["t"][at] == t, at
+    assert pop.t[at] == t if reached else math.isnan(pop.t[at]), at
+    for k, x in zip(FIELDS, state):
+        np.testing.assert_array_equal(pop.stopped_at[k][at], x, err_msg=f"entry {at}, {k}")
+        np.testing.assert_array_equal(getattr(pop, k)[at], x if reached else np.full_like(x, np.nan),
+                                      err_msg=f"entry {at}, {k}")
+
+
 def _assert_same_as_single(pop, table, f_ref, f_end, options):
     m1, m2, c1, c2, ell, nh = table
     for i in range(m1.size):
         fe = None if f_end is None else float(np.broadcast_to(f_end, m1.shape)[i])
-        t, state, term, nfev = _single_end(i, m1, m2, c1, c2, ell, nh, f_ref, fe, options)
-        assert pop.t[i] == t and pop.termination[i] == term and pop.nfev[i] == nfev, i
-        for k, x in zip(FIELDS, state):
-            np.testing.assert_array_equal(getattr(pop, k)[i], x, err_msg=f"binary {i}, {k}")
+        single = _single_end(i, m1, m2, c1, c2, ell, nh, f_ref, fe, options)
+        assert pop.nfev[i] == single[3], i
+        _assert_same_state(pop, i, single, fe)
 
 
 @pytest.mark.parametrize("options", [
@@ -187,10 +204,7 @@ def test_evolve_many_calls_the_one_compiled_core(cold_python):
 
 
 def _assert_entry_same_as_single(pop, i, k, table, f_ref, f, options):
-    t, state, term, _ = _single_end(i, *table, f_ref, f, options)
-    assert pop.t[i, k] == t and pop.termination[i, k] == term, (i, k)
-    for name, x in zip(FIELDS, state):
-        np.testing.assert_array_equal(getattr(pop, name)[i, k], x, err_msg=f"binary {i}, target {k}, {name}")
+    _assert_same_state(pop, (i, k), _single_end(i, *table, f_ref, f, options), f)
 
 
 @pytest.mark.parametrize("options", [{}, {"approximant": "T1", "rotor": "orbital", "atol": 1e-10}])

@@ -78,8 +78,8 @@ def test_rows_equal_single_evolve_bitwise_and_failures_fail_alone(in_tmp, capsys
     code, out, err = evolve(capsys, "--batch", "t.csv", "--population", "-o", "pop.h5")
     assert code == 1 and err == ""
     lines = out.splitlines()
-    assert lines[0] == ("pnrotor evolve --batch t.csv --population: 11 binaries (4 with bad values), final states by "
-                        "evolve_many in 4 calls")   # T4 · T1 at 1e-10 · pn_order 3 · pn_order 5
+    assert lines[0] == ("pnrotor evolve --batch t.csv --population: 11 binaries, final states by evolve_many in 1 chunk "
+                        "of up to 10000 rows, on this process")
     assert lines[1:-1] == FAILED
     assert lines[-1].startswith("wrote 6 final states to pop.h5; 5 failed; ") and lines[-1].endswith(" rows/s)")
     assert sorted(os.listdir(in_tmp)) == ["pop.h5", "t.csv"]
@@ -152,11 +152,9 @@ def test_a_pnrotor_without_the_kind_refuses_the_file_clearly(tmp_path, monkeypat
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--jobs", "2"], "--jobs cannot be combined with --population"),
-    (["--jobs", "0"], "--jobs cannot be combined with --population"),
+    (["--jobs", "0"], "--jobs must be at least 1, got 0"),
+    (["--jobs", "2", "--scheduler", "tcp://localhost:1"], "--jobs applies to local runs"),
     (["--modes", "--ell-max", "0", "--distance", "0"], "--modes, --ell-max, --distance cannot be combined"),
-    (["--scheduler", "tcp://localhost:1"], "--scheduler cannot be combined with --population"),
-    (["--resume"], "--resume cannot be combined with --population"),
     (["--modes", "--ell-max", "3"], "--modes, --ell-max cannot be combined with --population"),
     (["--amplitude-order", "2", "--distance", "10"], "--amplitude-order, --distance cannot be combined"),
     (["--sampling", "1/4096"], "--sampling must be final with --population (final states only), got '1/4096'"),
@@ -164,7 +162,7 @@ def test_a_pnrotor_without_the_kind_refuses_the_file_clearly(tmp_path, monkeypat
     (["-o", "missing/p.h5"], "folder missing does not exist"),
 ])
 def test_usage_errors_exit_2_without_traceback_or_file(args, message, in_tmp, capsys, monkeypatch):
-    monkeypatch.setattr(population.Plan, "_evolve", staticmethod(lambda *a: pytest.fail("computed")))
+    monkeypatch.setattr(population, "_evolve", lambda *a: pytest.fail("computed"))
     code, out, err = evolve(capsys, "--batch", "t.csv", "--population", *args)
     assert code == 2 and out == "" and err.startswith("pnrotor evolve: error: ") and message in err, err
     assert err.count("\n") == 1 and os.listdir(in_tmp) == ["t.csv"]
@@ -189,14 +187,24 @@ def test_existing_output_is_refused_unless_overwrite(in_tmp, capsys, monkeypatch
 
 
 def test_interrupted_population_leaves_no_file(in_tmp, capsys, monkeypatch):
-    """Ctrl-C while the table is being written (its temporary file exists): exit 130, neither file left."""
+    """Ctrl-C while the table is being written (its temporary file exists): exit 130, no table nor temporary file
+    left; the finished chunk is kept for --resume, which writes the table."""
+    real = hdf5._put_run
+
     def interrupted(g, *args):
-        assert any(name.endswith(".pnrotor-tmp") for name in os.listdir(in_tmp))
-        raise KeyboardInterrupt
+        if any(name.endswith(".pnrotor-tmp") for name in os.listdir(in_tmp)):
+            raise KeyboardInterrupt
+        return real(g, *args)
 
     monkeypatch.setattr(hdf5, "_put_run", interrupted)
     code, _, err = evolve(capsys, "--batch", "t.csv", "--population", "-o", "p.h5")
-    assert code == 130 and "interrupted" in err and os.listdir(in_tmp) == ["t.csv"]
+    assert code == 130 and err == ("pnrotor evolve: interrupted; 1 finished chunk kept in p.h5.parts; complete the "
+                                   "population with --resume (resume=True)\n")
+    assert sorted(os.listdir(in_tmp)) == ["p.h5.parts", "t.csv"]
+    monkeypatch.setattr(hdf5, "_put_run", real)
+    monkeypatch.setattr(population, "_evolve", lambda *a: pytest.fail("computed again"))
+    code, out, _ = evolve(capsys, "--batch", "t.csv", "--population", "-o", "p.h5", "--resume", "-q")
+    assert code == 1 and out.splitlines()[:-1] == FAILED and sorted(os.listdir(in_tmp)) == ["p.h5", "t.csv"]
 
 
 def test_rows_evolve_refuses_fail_with_its_message(in_tmp, capsys):
@@ -218,3 +226,13 @@ def test_rows_evolve_refuses_fail_with_its_message(in_tmp, capsys):
                            sampling="final")
         assert f"({name}): {refused.value}" in out, name
     assert list(hdf5.read(in_tmp / "r.h5").name) == ["ok"]
+
+
+def test_a_progress_bar_of_rows_on_a_terminal_unless_quiet(in_tmp, capsys, monkeypatch):
+    import sys
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    code, _, err = evolve(capsys, "--batch", "t.csv", "--population", "-o", "a.h5")
+    assert code == 1 and "11/11" in err and "row/s" in err
+    code, _, err = evolve(capsys, "--batch", "t.csv", "--population", "-o", "b.h5", "-q")
+    assert code == 1 and err == ""

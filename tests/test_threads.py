@@ -36,6 +36,29 @@ def test_parts_cover_the_range_in_order(n, min_part, align, count):
         assert n < 2 * max(min_part, align) or count == 1
 
 
+@pytest.mark.parametrize("seconds_per_sample, parts", [(1e-9, 1), (1e-7, 1), (1.5e-7, 2), (2e-6, 3)])
+def test_run_timed_hands_out_only_parts_of_a_millisecond(monkeypatch, seconds_per_sample, parts):
+    """A kernel of 20,000 samples costing (on a clock the kernel advances) 1 ns, 0.1, 0.15 and 2 µs each: after the
+    timed first samples, here, the other 17,952 stay here at 1 ns and at 0.1 µs (two parts would have 0.9 ms each),
+    go in two parts at 0.15 µs (three would have 0.9 ms) and in three at 2 µs; the calls cover the range in order,
+    in blocks."""
+    clock = [0.0]
+    calls = []
+
+    def kernel(lo, hi):
+        calls.append((lo, hi, threading.get_ident()))
+        clock[0] += (hi - lo) * seconds_per_sample
+
+    monkeypatch.setattr(threads.time, "perf_counter", lambda: clock[0])
+    monkeypatch.setattr(threads, "thread_count", lambda: 3)
+    threads.run_timed(kernel, 20_000, 256)
+    ranges = sorted((lo, hi) for lo, hi, _ in calls)
+    assert calls[0][:2] == (0, threads.TIMED_SAMPLES) and calls[0][2] == threading.get_ident()
+    assert len(calls) == 1 + parts and ranges[0][0] == 0 and ranges[-1][1] == 20_000
+    assert all(a[1] == b[0] and b[0] % 256 == 0 for a, b in zip(ranges, ranges[1:]))
+    assert all((hi - lo) * seconds_per_sample >= threads.PART_SECONDS for lo, hi in ranges[1:]) or parts == 1
+
+
 def test_an_error_here_waits_for_the_running_parts_and_drops_the_others():
     done, started = [], []
     running = threading.Event()

@@ -39,14 +39,15 @@ def case(request):
 
 def test_history_and_modes_are_the_evolutions_bitwise(case):
     """The streamed history is evolve's with sampling=Δt and the streamed modes modes(evolve(…))'s, bitwise (the same
-    kernels on the same samples in the same blocks), at ℓ ≤ 8 3.5PN in strain and ℓ ≤ 4 1.5PN in r h / M."""
+    kernels on the same samples in the same blocks), at ℓ ≤ 8 3.5PN in strain, ℓ ≤ 4 1.5PN in r h / M and ℓ = 2
+    Newtonian (no spin term: the precessing runs' spins are then not interpolated)."""
     binary, options, run, stream = case
     assert len(stream) == len(run) > 2 * 1024   # several blocks and two parts on the threads
     evolution = stream.evolution().compute()
     for name in ARRAYS:
         np.testing.assert_array_equal(getattr(evolution, name), getattr(run, name), err_msg=name)
     assert evolution.termination == run.termination and evolution.inputs == run.inputs
-    for args in ((8, 3.5, 100.0), (4, 1.5, None)):
+    for args in ((8, 3.5, 100.0), (4, 1.5, None), (2, 0, 100.0)):
         h, expected = stream.modes(*args).compute(), pnrotor.modes(run, *args)
         for name in ("t", "t_seconds", "data", "R", "Phi"):
             np.testing.assert_array_equal(getattr(h, name), getattr(expected, name), err_msg=name)
@@ -55,10 +56,10 @@ def test_history_and_modes_are_the_evolutions_bitwise(case):
 
 def test_polarizations_are_the_modes_sum_to_rounding(case):
     """pnrotor.polarizations (the modes m = 2 in the frame of the line of sight) against the inertial modes' sum
-    Modes.polarizations: within 1e-13 of max|h| (measured ~2e-15) for every case, ℓ ≤ 8 and ℓ ≤ 4; t is evolve's
-    t_seconds."""
+    Modes.polarizations: within 1e-13 of max|h| (measured ~2e-15) for every case, ℓ ≤ 8, ℓ ≤ 4 and ℓ = 2
+    Newtonian; t is evolve's t_seconds."""
     binary, options, run, stream = case
-    for ell_max, order, inclination, phi_ref in ((8, 3.5, 0.7, 0.3), (4, 1.5, 2.9, -1.2)):
+    for ell_max, order, inclination, phi_ref in ((8, 3.5, 0.7, 0.3), (4, 1.5, 2.9, -1.2), (2, 0, 1.1, 0.4)):
         t, hp, hc = pnrotor.polarizations(*binary, inclination=inclination, distance=100.0, delta_t=DT,
                                           phi_ref=phi_ref, ell_max=ell_max, amplitude_order=order, **options)
         ep, ec = pnrotor.modes(run, ell_max, order, 100.0).polarizations(inclination, phi_ref)
@@ -98,18 +99,22 @@ def test_tides_and_memory_stream_as_the_evolutions():
     assert np.max(np.abs(hp - php)) < 1e-13 * peak and np.max(np.abs(hc - phc)) < 1e-13 * peak
 
 
-def test_thread_count_does_not_change_the_numbers():
-    """Polarizations and modes on one thread and on the machine's: bitwise the same (each sample by the same code)."""
+def test_thread_count_does_not_change_the_numbers(monkeypatch):
+    """Polarizations and modes on one thread and in parts on three: bitwise the same (each sample by the same
+    code)."""
     m1, m2, chi1, chi2, f_ref, options = CASES["NSBH"]
     stream = pnrotor.stream(m1, m2, chi1, chi2, f_ref, delta_t=DT, **options)
     wave = (stream.polarizations(inclination=0.4, distance=50.0), stream.modes(5, 2.5))
-    assert len(threads.parts(len(stream), S.MIN_PART, S._CHUNK)) == min(2, threads.thread_count())
+    handed = []
+    run = threads.run
+    monkeypatch.setattr(threads, "run", lambda kernel, ranges: (handed.append(len(ranges)), run(kernel, ranges)))
+    monkeypatch.setattr(threads, "thread_count", lambda: 3)
+    monkeypatch.setattr(threads, "PART_SECONDS", 0.0)   # parts of any length
     many = [w.compute() for w in wave]
-    threads.limit(1)
-    try:
-        one = [w.compute() for w in wave]
-    finally:
-        threads.limit(None)
+    assert handed == [3, 3]
+    monkeypatch.setattr(threads, "thread_count", lambda: 1)
+    one = [w.compute() for w in wave]
+    assert handed[2:] == [1, 1]
     np.testing.assert_array_equal(one[0].h_plus, many[0].h_plus)
     np.testing.assert_array_equal(one[0].h_cross, many[0].h_cross)
     np.testing.assert_array_equal(one[1].data, many[1].data)
@@ -184,7 +189,7 @@ def test_results_too_large_for_memory_name_the_streaming_write(monkeypatch):
     (lambda b: pnrotor.polarizations(*b, distance=1.0, delta_t=DT), TypeError, "inclination"),
     (lambda b: pnrotor.stream(*b, delta_t=DT).polarizations(inclination=0.1, distance=None), ValueError,
      "distance is required"),
-    (lambda b: pnrotor.modes(*b, delta_t=DT, amplitude_order=4), ValueError, "amplitude_order must be one of"),
+    (lambda b: pnrotor.modes(*b, delta_t=DT, amplitude_order=4.5), ValueError, "amplitude_order must be one of"),
 ])
 def test_bad_arguments_name_themselves(call, error, message):
     with pytest.raises(error, match=message):

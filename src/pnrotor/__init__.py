@@ -9,7 +9,7 @@ _EXPORTS = {
     "Evolution": "pnrotor.pn.evolve",
     "evolve_many": "pnrotor.pn.many",
     "Population": "pnrotor.pn.many",
-    "modes": "pnrotor.waveform.modes",
+    "modes": "pnrotor.waveform.stream",
     "Modes": "pnrotor.waveform.modes",
     "polarizations": "pnrotor.waveform.stream",
     "stream": "pnrotor.waveform.stream",

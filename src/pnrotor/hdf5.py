@@ -124,6 +124,17 @@ _ROTOR = Array(("N", 4), (
     "1; scalar-first unit quaternion (w, x, y, z), sign-continuous in time; "
     "frame vectors are R x R^-1, R y R^-1, R z R^-1 (Boyle 2016, eq:rotor-rotation)"
 ), rotors=True)
+_STATE = {
+    "t": Array(("N",), _M + "; t = 0 at f_ref"),
+    "t_seconds": Array(("N",), "s; t = 0 at f_ref"),
+    "v": Array(("N",), "c; PN parameter v = (M Omega_orb)^(1/3)"),
+    "Phi": Array(("N",), "rad; orbital phase, 0 at f_ref"),
+    "chi1": Array(("N", 3), "1; dimensionless spin S1 / m1^2, inertial-frame components"),
+    "chi2": Array(("N", 3), "1; dimensionless spin S2 / m2^2, inertial-frame components"),
+    "R": _ROTOR,
+    "ell_hat": Array(("N", 3), "1; unit normal to the orbital plane, inertial-frame components"),
+}
+"""The state of a binary in a `PopulationTable`, one per row: at its target, and where its integration stopped."""
 ARRAYS = {
     "FrameHistory": {
         "t": Array(("N",), "time unit of the angular velocity (omega in rad per unit)"),
@@ -155,16 +166,13 @@ ARRAYS = {
     },
     "PopulationTable": {
         "name": Array(("N",), "the row's name (the batch table's name column, or its default name)", "str"),
-        "t": Array(("N",), _M + "; t = 0 at f_ref"),
-        "t_seconds": Array(("N",), "s; t = 0 at f_ref"),
-        "v": Array(("N",), "c; PN parameter v = (M Omega_orb)^(1/3)"),
-        "Phi": Array(("N",), "rad; orbital phase, 0 at f_ref"),
-        "chi1": Array(("N", 3), "1; dimensionless spin S1 / m1^2, inertial-frame components"),
-        "chi2": Array(("N", 3), "1; dimensionless spin S2 / m2^2, inertial-frame components"),
-        "R": _ROTOR,
-        "ell_hat": Array(("N", 3), "1; unit normal to the orbital plane, inertial-frame components"),
+        **{name: array._replace(units=array.units + "; at the row's target, NaN where reached is false", finite=False)
+           for name, array in _STATE.items()},
         "termination": Array(("N",), "why the integration to this state stopped (f_max, f_min or the end of the "
                              "inspiral, as pnrotor.evolve names it)", "str"),
+        "reached": Array(("N",), "whether the integration reached the row's target (f_max, f_min or the end of the "
+                         "inspiral)", "bool"),
+        **{"stopped_at/" + name: array._replace(finite=False) for name, array in _STATE.items()},
         "message": Array(("N",), "the termination's explanation", "str"),
         "nsteps": Array(("N",), "step attempts of the integration that gave the state", "int64"),
         "nfev": Array(("N",), "right-hand-side evaluations of that integration", "int64"),
@@ -186,9 +194,13 @@ ARRAYS = {
                                         "default)", finite=False),
         "inputs/precession": Array(("N",), "spin precession model", "str"),
         "inputs/atol": Array(("N",), "absolute tolerance of the integrator"),
+        "inputs/lambda1": Array(("N",), "1; dimensionless tidal deformability of body 1"),
+        "inputs/lambda2": Array(("N",), "1; dimensionless tidal deformability of body 2"),
+        "inputs/tidal_order": Array(("N",), "PN order of the tidal terms (0, 5 or 6; NaN: pnrotor.evolve's default)",
+                                    finite=False),
     },
 }
-_POPULATION = ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat", "termination", "message", "nsteps", "nfev")
+_POPULATION = tuple(name for name in ARRAYS["PopulationTable"] if name != "name" and not name.startswith("inputs/"))
 ARRAYS["Population"] = {name: ARRAYS["PopulationTable"][name]._replace(
     shape=("N", "K", *ARRAYS["PopulationTable"][name].shape[1:]), finite=False) for name in _POPULATION}
 """The array fields of each run kind (`Array`): what `write` and `read` check, and their ``units``.  A name
@@ -274,6 +286,20 @@ def _streamed(run):
     ``len(run)`` samples and ``run.block(lo, hi)``, the run dataclass of samples lo ... hi-1, which `write` and
     `Batch.add` write block by block."""
     return not dataclasses.is_dataclass(run) and callable(getattr(run, "block", None))
+
+
+def image(run, *, compression=None, checksum=True):
+    """The bytes of the file `write` would write for the run dataclass `run` (checked as it checks it), built in
+    memory: for a process that computes a run and hands it to another to store (a population's chunks)."""
+    import io
+
+    _check_run(run)
+    _check_compression(compression)
+    _check_checksum(checksum)
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w", libver=("v110", "v110")) as f:
+        _put_run(f, run, compression, checksum)
+    return buffer.getvalue()
 
 
 @contextmanager
@@ -401,6 +427,108 @@ class Batch:
         self._added.add(name)
 
 
+def concatenate(path, sources, *, overwrite=False, compression=None, checksum=True):
+    """Write the one-run files `sources` (pnrotor files of one kind, e.g. the chunks of a population) as one run at
+    `path`, atomically as `write` does, and return the path: each array of `ARRAYS` with N samples along its first
+    axis is the concatenation of the sources' in their order; every other field is the first source's.
+
+    The first source is read as `read` reads it (checked); each other one must hold the same kind and fields, with
+    the same values but for its arrays of samples, and those of the first's dtype and shape but for their length (a
+    ValueError naming it otherwise).  Their bytes are copied as stored, one source at a time, so the memory taken is
+    that of the largest, whatever the total (their checksums are checked as HDF5 reads them, but the layout of the
+    others is not checked again: a population's chunks were checked as they were written).  ``compression`` and
+    ``checksum`` as in `write`."""
+    path, sources = Path(path), [Path(source) for source in sources]
+    if not sources:
+        raise ValueError("concatenate needs at least one source file")
+    _check_compression(compression)
+    _check_checksum(checksum)
+    _check_target(path, overwrite)
+    first = read(sources[0])
+    kind = _kind_of(first)
+    stacked = {name: spec for name, spec in ARRAYS.get(kind, {}).items() if spec.shape[:1] == ("N",)}
+    if not stacked:
+        raise ValueError(f"runs of kind {kind} have no arrays of samples to concatenate")
+    lengths, widths = [], {}
+    for source in sources:   # the length of each and the widest string of each column, from the files' metadata
+        with _open(source) as f:
+            lengths.append(f[next(iter(stacked))].shape[0])
+            for name, spec in stacked.items():
+                if spec.dtype == "str":
+                    widths[name] = max(widths.get(name, 1), f[name].dtype.itemsize)
+    values = _fields(first)
+    for name, spec in stacked.items():
+        array = _item(values, name)
+        dtype = h5py.string_dtype("utf-8", widths[name]) if spec.dtype == "str" else array.dtype
+        _set(values, name, _Unwritten((sum(lengths),) + array.shape[1:], np.dtype(dtype)))
+    template = type(first)(**values)
+    others = {name: value for name, value in _fields(first).items() if name not in NOT_WRITTEN and not callable(value)}
+    for name in stacked:
+        _set(others, name, None)
+    _check_space(path, _run_bytes(template), compression)
+    with _replacing(path, overwrite) as out:
+        _put_run(out, template, compression, checksum)
+        start = 0
+        for source, length in zip(sources, lengths):
+            with _open(source) as f:
+                attributes = _attributes(f)
+                _check_metadata(attributes, source)
+                found = _get(f, attributes, skip=_NOT_FIELDS, leave=stacked)
+                for name in stacked:
+                    _set(found, name, None)
+                if attributes["kind"] != kind or not _same(found, others):
+                    raise ValueError(f"{source} differs from {sources[0]} in more than its arrays of samples: not "
+                                     "concatenated")
+                for name, spec in stacked.items():
+                    data = f[name][...]
+                    if spec.dtype == "str" and h5py.check_string_dtype(f[name].dtype) is None or \
+                            spec.dtype != "str" and data.dtype != out[name].dtype or \
+                            data.shape != (length,) + out[name].shape[1:]:
+                        raise ValueError(f"{source}: dataset {name!r} is {data.dtype} {data.shape}, not "
+                                         f"{out[name].dtype} of {length} samples as its length and {sources[0]} say")
+                    out[name][start:start + length] = data
+            start += length
+    return path
+
+
+class _Unwritten(NamedTuple):
+    """An array that `_dataset` creates empty, of this shape and dtype, to be written in slices (`concatenate`)."""
+
+    shape: tuple
+    dtype: np.dtype
+
+    ndim = property(lambda self: len(self.shape))
+    size = property(lambda self: int(np.prod(self.shape)))
+    itemsize = property(lambda self: self.dtype.itemsize)
+    nbytes = property(lambda self: self.size * self.itemsize)
+
+
+def _fields(run):
+    """The fields of the run dataclass `run`, name → value, its dicts copied."""
+    values = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
+    return {name: dict(value) if isinstance(value, dict) else value for name, value in values.items()}
+
+
+def _item(values, name):
+    """The value ``values[name]``, or ``values[GROUP][KEY]`` for a name ``GROUP/KEY``."""
+    group, _, key = name.rpartition("/")
+    return (values[group] if group else values)[key]
+
+
+def _set(values, name, value):
+    group, _, key = name.rpartition("/")
+    (values[group] if group else values)[key] = value
+
+
+def _same(a, b):
+    """Whether two fields' values are equal: dicts item by item, arrays in shape and bytes, NaN equal to NaN."""
+    if isinstance(a, dict) or isinstance(b, dict):
+        return isinstance(a, dict) and isinstance(b, dict) and a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.shape(a) == np.shape(b) and np.asarray(a).tobytes() == np.asarray(b).tobytes()
+    return a == b or a != a and b != b
+
+
 def read(path, group=None):
     """The run stored in `path` (in its batch group `group`), as the dataclass it was written from.
 
@@ -419,10 +547,13 @@ def read(path, group=None):
         _check_metadata(attributes, where)
         cls = _class_of(attributes["kind"], where)
         values = _get(g, attributes, skip=_NOT_FIELDS)
-        problems = layout_problems(cls, values)
         metadata = {name: _value(attributes[name]) for name in _METADATA}
         crc = attributes.get(_STRINGS_CRC)
-        if not problems and crc is not None and crc != _strings_crc({**metadata, **values}):
+        damaged = crc is not None and crc != _strings_crc({**metadata, **values})
+        if metadata["pnrotor_schema"] == 1 and hasattr(cls, "from_schema_1"):   # fields added since, derived
+            values = cls.from_schema_1(values)
+        problems = layout_problems(cls, values)
+        if not problems and damaged:
             problems.append("its string attributes are damaged (their CRC-32 is not the one written with them)")
         if problems:
             raise ValueError(f"{where}: {'; '.join(problems)}")
@@ -676,7 +807,7 @@ def _run_bytes(run):
 
 def _array_bytes(value):
     """Bytes of the numpy arrays in `value` and in the dicts it holds."""
-    if isinstance(value, np.ndarray):
+    if isinstance(value, (np.ndarray, _Unwritten)):
         return value.nbytes
     if isinstance(value, dict):
         return sum(_array_bytes(item) for item in value.values())
@@ -944,8 +1075,8 @@ def _put(g, name, value, storage, where):
         for key, item in value.items():
             _check_name(key, f"key of {where}")
             _put(sub, key, item, storage, f"{where}[{key!r}]")
-    elif _is_strings(value):
-        _dataset(g, name, _utf8(value, where), *storage)
+    elif _is_strings(value) or isinstance(value, _Unwritten):
+        _dataset(g, name, _utf8(value, where) if _is_strings(value) else value, *storage)
     elif isinstance(value, np.ndarray) or type(value) in _SEQUENCES.values():
         try:
             array = np.asarray(value)
@@ -999,7 +1130,10 @@ def _dataset(g, name, array, compression, checksum):
         nchunks = -(-rows * array.itemsize * (array.size // rows) // _CHUNK_BYTES)  # ceiling division
         options["chunks"] = (-(-rows // nchunks),) + array.shape[1:]  # equal chunks: no padding in the last
         options.update(_filters(compression, checksum))
-    dataset = g.create_dataset(name, data=array, **options)
+    if isinstance(array, _Unwritten):
+        dataset = g.create_dataset(name, shape=array.shape, dtype=array.dtype, **options)
+    else:
+        dataset = g.create_dataset(name, data=array, **options)
     if "chunks" in options:   # HDF5 keeps the last chunks in its cache: written now, a full disk raises here
         dataset.flush()       # rather than in the dataset's deallocation, where h5py can only print it
     if array.nbytes >= _WRITEBACK_BYTES and g.file.filename in _WRITEBACKS:
@@ -1197,13 +1331,17 @@ def _value(attribute):
     return attribute.item() if isinstance(attribute, np.generic) else attribute
 
 
-def _get(g, attributes=None, skip=()):
-    """The values stored in group `g` (its `_attributes` if given), but the attributes `skip`: name → value."""
+def _get(g, attributes=None, skip=(), leave=(), prefix=""):
+    """The attributes (group `g`'s `_attributes`, or `attributes` if given; but those in `skip`), datasets (but those
+    whose path from the run is in `leave`) and subgroups of group `g` (whose path from the run is `prefix`) as the
+    values written: name → value."""
     attributes = _attributes(g) if attributes is None else attributes
     values = {name: _value(value) for name, value in attributes.items() if name not in skip}
     for name, item in g.items():
         if isinstance(item, h5py.Group):
-            values[name] = _get(item)
+            values[name] = _get(item, leave=leave, prefix=f"{prefix}{name}/")
+        elif prefix + name in leave:
+            continue
         elif h5py.check_string_dtype(item.dtype) is not None:   # an array of strings (`_utf8`)
             values[name] = item.asstr()[...]
         else:

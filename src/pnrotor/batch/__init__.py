@@ -66,6 +66,11 @@ class Plan:
     resume: bool = False
     modes: tuple = None
 
+    _PARTS = "run-*.h5"
+    """The part files in :attr:`parts` that hold finished results (a run each)."""
+    _KEPT = "runs", "modes, compression, checksum"
+    """What the part files hold, and the options besides the table that they depend on (the resume's message)."""
+
     @property
     def tasks(self):
         extra = {} if self.modes is None else {"modes": self.modes}
@@ -120,7 +125,7 @@ class Plan:
         except KeyboardInterrupt:
             if results is not None:
                 results.close()   # the workers stopped, then counted: a part one wrote meanwhile is kept too
-            kept = len(list(self.parts.glob("run-*.h5")))   # the workers' too, not only those reported yet
+            kept = len(list(self.parts.glob(self._PARTS)))   # the workers' too, not only those reported yet
             if not kept:   # (and the folder goes)
                 raise KeyboardInterrupt("no run had finished; nothing kept") from None
             raise KeyboardInterrupt(f"{kept} finished run{'s' * (kept != 1)} kept in {self.parts}; "
@@ -161,16 +166,34 @@ class Plan:
         text += f"\nstorage {sorted(self.storage.items())!r}"
         return hashlib.sha256(text.encode()).hexdigest() + "\n"
 
+    def check_parts(self):
+        """Self, unless :attr:`parts` is held by a running batch, or holds the results of an interrupted one that
+        this plan does not resume (an error naming it)."""
+        if self.parts.exists() and _locked(self.parts):
+            raise _another_batch(self)
+        if self.parts.exists() and not self.resume:
+            raise FileExistsError(f"{self.parts} holds the finished {self._KEPT[0]} of an interrupted batch: pass "
+                                  "--resume (resume=True) to complete it, or remove the folder")
+        return self
+
+    def _kept(self):
+        """Whether :attr:`parts` holds results of an earlier attempt, after checking that they are this table's (its
+        fingerprint, a ValueError otherwise)."""
+        table = self.parts / _TABLE
+        if not table.exists() and not any(self.parts.glob(self._PARTS)):   # nothing kept: a first attempt
+            return False
+        if not table.exists() or table.read_text() != self._fingerprint():
+            raise ValueError(f"{self.parts} holds {self._KEPT[0]} of another table, or of other options "
+                             f"({self._KEPT[1]}), or of an older version of them; remove the folder to start the batch "
+                             "afresh")
+        return True
+
     def _stored(self):
         """{row index: Stored} of the runs already in :attr:`parts`, after checking they are this table's."""
         from pnrotor import hdf5
 
-        table = self.parts / _TABLE
-        if not table.exists() and not any(self.parts.glob("run-*.h5")):   # nothing kept: a first attempt
+        if not self._kept():
             return {}
-        if not table.exists() or table.read_text() != self._fingerprint():
-            raise ValueError(f"{self.parts} holds runs of another table, or of other options (modes, compression, "
-                             "checksum), or of an older version of them; remove the folder to start the batch afresh")
         done = {}
         for part in sorted(self.parts.glob("*.h5")):
             try:  # a part a kill cut short, or damaged: its runs are computed again
@@ -203,7 +226,7 @@ class Plan:
                     raise _another_batch(self)
                 yield
         except BaseException:
-            if made and self.parts.is_dir() and not any(self.parts.glob("run-*.h5")):
+            if made and self.parts.is_dir() and not any(self.parts.glob(self._PARTS)):
                 shutil.rmtree(self.parts)
                 if made_folder and not any(self.path.parent.iterdir()):
                     self.path.parent.rmdir()
@@ -275,12 +298,7 @@ def plan(table, output, *, jobs=None, scheduler=None, overwrite=False, compressi
                              f"do): {', '.join(clash)}")
     result = Plan(rows, path, jobs, scheduler, overwrite, dict(compression=compression, checksum=checksum),
                   create_folder, bool(resume), wave)
-    if result.parts.exists() and _locked(result.parts):
-        raise _another_batch(result)
-    if result.parts.exists() and not resume:
-        raise FileExistsError(f"{result.parts} holds the finished runs of an interrupted batch: pass --resume "
-                              "(resume=True) to complete it, or remove the folder")
-    return result
+    return result.check_parts()
 
 
 def check_output(output, overwrite):
@@ -352,9 +370,9 @@ class _InterruptFlag:
         self.previous = {}
 
 
-def _progress_bar(total, enabled):
-    """A tqdm bar on stderr, without tqdm's monitor thread (a thread would make later worker pools avoid
-    'fork'), or a stand-in that does nothing."""
+def _progress_bar(total, enabled, unit="run"):
+    """A tqdm bar on stderr (`unit`s done, their rate, the time left), without tqdm's monitor thread (a thread would
+    make later worker pools avoid 'fork'), or a stand-in that does nothing."""
     if not enabled:
         return contextlib.nullcontext(type("NoBar", (), {"update": lambda self, n=1: None})())
     from tqdm import tqdm
@@ -362,4 +380,4 @@ def _progress_bar(total, enabled):
     class Bar(tqdm):
         monitor_interval = 0
 
-    return Bar(total=total, unit="run", file=sys.stderr, desc="evolve")
+    return Bar(total=total, unit=unit, file=sys.stderr, desc="evolve")

@@ -3,25 +3,19 @@
 A CSV file has one binary per row, with columns named like `pnrotor.evolve`'s keywords (:data:`COLUMNS`;
 vectors as ``"x,y,z"`` strings); a TOML file has one ``[[binary]]`` table per binary with the same keys
 (vectors as arrays).  Empty cells take the caller's defaults (the CLI's options), then :data:`DEFAULTS`.
+The population mode also reads Parquet and HDF5 tables, in pieces (:class:`TableFile`).
 Problems of the file itself (missing, unreadable, unknown or missing columns, repeated names) raise
 ``ValueError`` (``FileNotFoundError``/``IsADirectoryError`` for the path); a bad value only marks its row
 (:attr:`Row.error`), so one bad binary does not stop the others.  Group names default to
 :func:`default_name`, built from the parameters.
 """
 
+import contextlib
+import functools
 import math
 from pathlib import Path
 
-DEFAULTS = {
-    "approximant": "T4", "pn_order": 3.5, "spin_orbit_order": None, "spin_spin_order": None,
-    "precession": "averaged", "f_min": None, "f_max": None, "sampling": "steps", "atol": 1e-12,
-    "lambda1": 0.0, "lambda2": 0.0, "tidal_order": None, "horizon_absorption": False,
-}
-"""Defaults of the optional run parameters (those of `pnrotor.evolve`; None: evolve's own choice)."""
-
-REQUIRED = ("m1", "m2", "chi1", "chi2", "f_ref")
-COLUMNS = REQUIRED + tuple(DEFAULTS) + ("name",)
-"""Columns of a batch CSV file (keys of a TOML ``[[binary]]`` table): the option names with ``_``."""
+from pnrotor.parameters import COLUMNS, DEFAULTS, REQUIRED  # noqa: F401 - the table's columns, named here too
 
 
 def parse_vector(text, name):
@@ -119,25 +113,14 @@ def read_batch(path, cli_defaults):
         raise FileNotFoundError(f"{path}: no such file")
     suffix = path.suffix.lower()
     if suffix == ".csv":
-        records = _csv_records(path)
+        records = list(_csv_records(path))
     elif suffix == ".toml":
         records = _toml_records(path)
     else:
         raise ValueError(f"batch file {path} must be .csv or .toml")
     if not records:
         raise ValueError(f"batch file {path} holds no binaries")
-    from pnrotor.hdf5 import _valid_name   # what can name a group (not at import: the CLI starts without h5py)
-
-    rows = []
-    for number, (label, record) in enumerate(records, 1):
-        row = Row(number, label)
-        try:
-            row.params, row.name = _row_parameters(record, cli_defaults)
-        except ValueError as error:
-            row.error = str(error)
-            if _valid_name(record.get("name")):   # a failure still says which row it is
-                row.name = record["name"]
-        rows.append(row)
+    rows = [parse_row(number, label, record, cli_defaults) for number, (label, record) in enumerate(records, 1)]
     seen = {}
     for row in rows:
         if row.name is not None and row.error is None:   # a failed row keeps its name for its FAILED line only
@@ -146,6 +129,132 @@ def read_batch(path, cli_defaults):
                                  f"{row.name!r}; give each a distinct name column")
             seen[row.name] = row
     return rows
+
+
+def parse_row(number, label, record, cli_defaults):
+    """The :class:`Row` of a record (column → cell; empty cells absent): its parameters and name, or its error."""
+    from pnrotor.hdf5 import _valid_name   # what can name a group (not at import: the CLI starts without h5py)
+
+    row = Row(number, label)
+    try:
+        row.params, row.name = _row_parameters(record, cli_defaults)
+    except ValueError as error:
+        row.error = str(error)
+        if _valid_name(record.get("name")):   # a failure still says which row it is
+            row.name = record["name"]
+    return row
+
+
+class TableFile:
+    """A batch table file read in pieces, whatever its length: CSV and TOML as :func:`read_batch` reads them, and
+    Parquet (``.parquet``: a column per name, vectors as lists of three numbers or ``"x,y,z"`` text, null cells
+    empty) or HDF5 (``.h5``, ``.hdf5``: a dataset per column at the root, of N rows, vectors (N, 3), text as
+    strings; NaN and empty strings are empty cells, as HDF5 has no null).
+
+    Opening it checks its structure (the columns, and each CSV line's fields) and counts its rows, :attr:`rows`;
+    :meth:`records` then yields (number, label, record) row by row, reading a piece at a time; :attr:`digest` is
+    the SHA-256 of its bytes.  A bad value is the business of :func:`parse_row` (its row only)."""
+
+    SUFFIXES = (".csv", ".toml", ".parquet", ".h5", ".hdf5")
+    _PIECE = 4096
+    """Rows read at a time from Parquet and HDF5 files."""
+
+    def __init__(self, path):
+        self.path = path = Path(path)
+        if path.is_dir():
+            raise IsADirectoryError(f"{path} is a folder, not a batch file")
+        if not path.exists():
+            raise FileNotFoundError(f"{path}: no such file")
+        self.suffix = path.suffix.lower()
+        if self.suffix not in self.SUFFIXES:
+            raise ValueError(f"batch file {path} must be .csv, .toml, .parquet, .h5 or .hdf5")
+        if self.suffix == ".csv":
+            self.rows = sum(1 for _ in _csv_records(path))
+        elif self.suffix == ".toml":
+            self.rows = len(_toml_records(path))
+        elif self.suffix == ".parquet":
+            self.rows = self._parquet().metadata.num_rows
+        else:
+            with self._hdf5() as (_, rows):
+                self.rows = rows
+        if not self.rows:
+            raise ValueError(f"batch file {path} holds no binaries")
+
+    def records(self):
+        """(number from 1, label, record) of each row in order, a record being column → cell without the empty
+        cells, as :func:`parse_row` takes it."""
+        if self.suffix == ".csv":
+            records = _csv_records(self.path)
+        elif self.suffix == ".toml":
+            records = _toml_records(self.path)
+        elif self.suffix == ".parquet":
+            records = ((None, {key: value for key, value in record.items() if value is not None})
+                       for piece in self._parquet().iter_batches(self._PIECE) for record in piece.to_pylist())
+        else:
+            records = self._hdf5_records()
+        for number, (label, record) in enumerate(records, 1):
+            yield number, label or f"row {number}", record
+
+    @functools.cached_property
+    def digest(self):
+        """The SHA-256 of the file's bytes, in hex (read once)."""
+        import hashlib
+
+        sha = hashlib.sha256()
+        with open(self.path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                sha.update(block)
+        return sha.hexdigest()
+
+    def _parquet(self):
+        try:
+            import pyarrow.parquet as pq
+        except ImportError:
+            raise ValueError("Parquet tables need pyarrow: pip install 'pnrotor[parquet]'") from None
+        try:
+            table = pq.ParquetFile(self.path)
+        except Exception as error:   # noqa: BLE001 - pyarrow's errors of a file that is not Parquet
+            raise ValueError(f"batch file {self.path} is not a Parquet file ({error})") from None
+        _check_columns(table.schema_arrow.names, f"batch file {self.path}")
+        return table
+
+    @contextlib.contextmanager
+    def _hdf5(self):
+        """(the open h5py File, its rows), its columns checked: datasets at its root, of equal lengths."""
+        import h5py
+
+        try:
+            f = h5py.File(self.path, "r")
+        except OSError as error:
+            raise ValueError(f"batch file {self.path} is not an HDF5 file HDF5 can open ({error})") from None
+        with f:
+            where = f"batch file {self.path}"
+            _check_columns(list(f), where)
+            if not all(isinstance(f[key], h5py.Dataset) for key in f):
+                raise ValueError(f"{where}: its columns must be datasets at the root of the file")
+            lengths = {key: f[key].shape[0] if f[key].ndim in (1, 2) else None for key in f}
+            if len(set(lengths.values())) != 1 or None in lengths.values():
+                raise ValueError(f"{where}: its columns must be datasets of one length N, (N,) or (N, 3); got "
+                                 + ", ".join(f"{key} {f[key].shape}" for key in f))
+            yield f, lengths[next(iter(f))]
+
+    def _hdf5_records(self):
+        import h5py
+
+        with self._hdf5() as (f, rows):
+            for start in range(0, rows, self._PIECE):
+                columns = {}
+                for key in f:
+                    data = f[key].asstr()[start:start + self._PIECE] if h5py.check_string_dtype(f[key].dtype) \
+                        else f[key][start:start + self._PIECE]
+                    columns[key] = data.tolist()
+                for i in range(len(next(iter(columns.values())))):
+                    yield None, {key: cell for key, cells in columns.items() if _filled(cell := cells[i])}
+
+
+def _filled(cell):
+    """Whether a cell of an HDF5 table holds a value (NaN and empty text are empty cells)."""
+    return cell != "" and cell == cell
 
 
 def _check_columns(keys, where):
@@ -159,6 +268,7 @@ def _check_columns(keys, where):
 
 
 def _csv_records(path):
+    """(label, record) of each row of a CSV batch file, read as they are yielded; a structural fault raises then."""
     import csv
 
     try:
@@ -172,20 +282,20 @@ def _csv_records(path):
             duplicated = sorted({name for name in header if header.count(name) > 1})
             if duplicated:
                 raise ValueError(f"batch file {path}: repeated column {', '.join(duplicated)}")
-            records = []
+            count = 0
             for cells in reader:
                 if not any(cell.strip() for cell in cells):
                     continue
                 if len(cells) != len(header):
                     raise ValueError(f"batch file {path} line {reader.line_num}: {len(cells)} fields for "
                                      f"{len(header)} columns (quote vectors: \"0.6,0,0.2\")")
-                record = {key: cell.strip() for key, cell in zip(header, cells) if cell.strip()}
-                records.append((f"row {len(records) + 1} (line {reader.line_num})", record))
+                count += 1
+                yield (f"row {count} (line {reader.line_num})",
+                       {key: cell.strip() for key, cell in zip(header, cells) if cell.strip()})
     except UnicodeDecodeError as error:
         raise ValueError(f"batch file {path} is not UTF-8 text ({error})") from None
     except csv.Error as error:
         raise ValueError(f"batch file {path} is not valid CSV ({error})") from None
-    return records
 
 
 def _toml_records(path):

@@ -21,12 +21,13 @@ which this module calls.
 A row that fails (bad value, evolve's ``ValueError``) is listed with its row number and message and
 the others are still written; exit status 1 then, 2 when the batch file itself is unusable.
 
-Population: ``pnrotor evolve --batch params.csv --population`` computes only each row's final state (an empty
-sampling cell means final), all together with `pnrotor.evolve_many` (one compiled loop on pnrotor's threads per group
-of rows sharing its shared options), and writes them as one table of columns, a `PopulationTable`
-(`pnrotor.batch.population`, which this module calls): the state at f_max, at f_min (integrated backward)
-or at the end of the inspiral.  Options of the other batch modes (--jobs, --scheduler, --resume, the modes)
-are usage errors with it; -o, --overwrite, the storage options and the exit status are as for batches.
+Population: ``pnrotor evolve --batch params.csv --population`` computes only each row's state at its target (an
+empty sampling cell means final) with `pnrotor.evolve_many`, chunk by chunk of the table (CSV, TOML, Parquet or
+HDF5, never read whole), in this process on pnrotor's threads, on ``--jobs`` worker processes or on a Dask cluster
+(``--scheduler``), and writes them as one table of columns, a `PopulationTable` (`pnrotor.batch.population`, which
+this module calls): the state at f_max, at f_min (integrated backward) or at the end of the inspiral.  Finished
+chunks are kept in ``FILE.parts`` as they finish, and ``--resume`` completes an interrupted population.  The modes
+options are usage errors with it; -o, --overwrite, the storage options, -q and the exit status are as for batches.
 
 The PN code (numba) is imported only when a run starts, so that the CLI starts quickly.
 """
@@ -48,8 +49,7 @@ line does not import numba (tests/test_cli_evolve.py checks that they agree)."""
 SPINS = ("chi1", "chi2")
 """The options of `REQUIRED` that a single run may leave out: zero spins."""
 
-NOT_WITH_POPULATION = ("jobs", "scheduler", "resume", "modes", "ell_max", "amplitude_order", "distance",
-                       "polarizations", "inclination", "phi_ref")
+NOT_WITH_POPULATION = ("modes", "ell_max", "amplitude_order", "distance", "polarizations", "inclination", "phi_ref")
 """Options of the other batch modes, refused with --population."""
 
 
@@ -130,19 +130,22 @@ def add_parser(subparsers):
     output.add_argument("-q", "--quiet", action="store_true",
                         help="print only the output file, failures and the batch's last line; no progress bar")
     batch = parser.add_argument_group("batch")
-    batch.add_argument("--batch", metavar="FILE", help=f"CSV or TOML file of binaries; columns {', '.join(COLUMNS)}")
+    batch.add_argument("--batch", metavar="FILE", help=f"CSV or TOML file of binaries (with --population also Parquet or "
+                       f"HDF5); columns {', '.join(COLUMNS)}")
     batch.add_argument("--jobs", type=int, metavar="N",
-                       help="local worker processes (default: os.cpu_count(); 1 runs in this process)")
+                       help="local worker processes (default: os.cpu_count(), with --population 1; 1 runs in this "
+                       "process)")
     batch.add_argument("--resume", action="store_true",
-                       help="complete an interrupted batch from the finished runs kept in OUTPUT.parts")
+                       help="complete an interrupted batch from the finished runs (chunks) kept in OUTPUT.parts")
     batch.add_argument("--scheduler", metavar="ADDRESS",
                        help="run the batch on this Dask scheduler (e.g. tcp://host:8786); needs pnrotor[dask]")
     batch.add_argument("--population", action="store_true",
-                       help="final states only, for population synthesis: every row computed together by "
-                       "pnrotor.evolve_many (pnrotor's threads; 26-42x the rows/s of the per-row batch) and written as "
-                       "one table, a column per quantity (docs/hdf5-schema.md); each row's state at f_max, at "
-                       "f_min (integrated backward) or at the end of the inspiral; sampling must be final (an "
-                       "empty cell means final); not with --jobs, --scheduler, --resume or --modes")
+                       help="final states only, for population synthesis: the rows computed by pnrotor.evolve_many in "
+                       "chunks (in this process on pnrotor's threads, on --jobs worker processes or a Dask --scheduler; "
+                       "kept in OUTPUT.parts as they finish, so --resume completes an interrupted run) and written as "
+                       "one table, a column per quantity (docs/hdf5-schema.md); each row's state at f_max, at f_min "
+                       "(integrated backward) or at the end of the inspiral, NaN where the row did not reach it; "
+                       "sampling must be final (an empty cell means final); not with --modes")
     parser.set_defaults(func=run)
 
 
@@ -386,12 +389,12 @@ def _run_batch(args):
         if getattr(args, option) is not None:
             raise UsageError(f"--{option.replace('_', '-')} cannot be combined with --batch; give it as the column "
                              f"{option} of the batch file")
-    if args.population:
-        return _run_population(args, start)
     if args.jobs is not None and args.scheduler is not None:
         raise UsageError("--jobs applies to local runs; a Dask cluster (--scheduler) sets its own parallelism")
     if args.jobs is not None and args.jobs < 1:
         raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
+    if args.population:
+        return _run_population(args, start)
     from pnrotor import batch
 
     rows = batch.read_batch(args.batch, _table_defaults(args))
@@ -420,24 +423,23 @@ def _run_population(args, start):
     given = [f"--{option.replace('_', '-')}" for option in NOT_WITH_POPULATION
              if getattr(args, option) is not None and getattr(args, option) is not False]
     if given:
-        raise UsageError(f"{', '.join(given)} cannot be combined with --population (one process computes the final "
-                         "states, on pnrotor's threads; no histories, so no modes)")
+        raise UsageError(f"{', '.join(given)} cannot be combined with --population (final states only: no histories, "
+                         "so no modes)")
     defaults = _table_defaults(args)
     if defaults["sampling"] not in (None, "final"):
         raise UsageError(f"--sampling must be final with --population (final states only), got {args.sampling!r}")
     from pnrotor.batch import population
 
     path, default_folder = _output_path(args, Path(args.batch).stem)
-    plan = population.plan(args.batch, path, overwrite=args.overwrite, compression=args.compression,
-                           checksum=args.checksum, defaults=defaults, create_folder=default_folder)
+    plan = population.plan(args.batch, path, jobs=args.jobs, scheduler=args.scheduler, resume=args.resume,
+                           overwrite=args.overwrite, compression=args.compression, checksum=args.checksum,
+                           defaults=defaults, create_folder=default_folder)
     if not args.quiet:
-        bad = sum(row.error is not None for row in plan.rows)
-        groups = len(plan.groups)
-        print(f"pnrotor evolve --batch {args.batch} --population: {_binaries(len(plan.rows))}"
-              + (f" ({bad} with bad values)" if bad else "")
-              + f", final states by evolve_many in {groups} call{'s' * (groups != 1)}")
-    _warn_if_cold(population=True)
-    outcome = plan.run()
+        chunks = len(plan.tasks)
+        print(f"pnrotor evolve --batch {args.batch} --population: {_binaries(plan.table.rows)}, final states by "
+              f"evolve_many in {chunks} chunk{'s' * (chunks != 1)} of up to {plan.chunk} rows, on {plan.where}")
+    _warn_if_cold(here=plan.where == "this process", population=True)
+    outcome = plan.run(progress=not args.quiet and sys.stderr.isatty())
     return _totals(outcome, path, start, "final state", "rows")
 
 

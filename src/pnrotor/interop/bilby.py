@@ -13,9 +13,11 @@ transforms it, and bilby places it at geocent_time.  In a bilby_pipe ini file::
     waveform-arguments-dict = {ell_max: 4, atol: 1e-10}
 
 (bilby_pipe names a waveform-generator class by its path, while its source model is only ever a frequency-domain
-one; a time-domain source function could not be named there).  ``pn_amplitude_order``, ``pn_phase_order`` and
-``pn_spin_order`` are LAL's integers (:mod:`pnrotor.interop.pipelines`; bilby's default amplitude order 0);
-entries of the waveform-arguments dict other than bilby's own are pnrotor's options.  In Python::
+one; a time-domain source function could not be named there).  ``pn_amplitude_order``, ``pn_phase_order``,
+``pn_spin_order`` and ``pn_tidal_order`` are LAL's integers (:mod:`pnrotor.interop.pipelines`; bilby's default
+amplitude order 0); entries of the waveform-arguments dict other than bilby's own are pnrotor's options.  bilby's
+binary-neutron-star parameters lambda_1, lambda_2 (e.g. from ``convert_to_lal_binary_neutron_star_parameters``)
+are the tidal deformabilities Λ₁, Λ₂.  In Python::
 
     generator = PNRotorWaveformGenerator(duration=8, sampling_frequency=2048,
                                          waveform_arguments=dict(waveform_approximant="PNRotorT4",
@@ -28,7 +30,8 @@ from pnrotor.interop.gwsignal import PNRotorGenerator
 
 __all__ = ["PNRotorWaveformGenerator"]
 
-ORDERS = {"pn_amplitude_order": "amplitude_order", "pn_phase_order": "phase_order", "pn_spin_order": "spin_order"}
+ORDERS = {"pn_amplitude_order": "amplitude_order", "pn_phase_order": "phase_order", "pn_spin_order": "spin_order",
+          "pn_tidal_order": "tidal_order"}
 """bilby's waveform arguments of the PN orders → PNRotorGenerator's options."""
 
 

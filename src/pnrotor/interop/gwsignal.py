@@ -14,10 +14,10 @@
 
 The parameters mean what they mean for LAL's SpinTaylorT4 generator (:mod:`pnrotor.interop.pipelines`): masses,
 Cartesian spins at f22_ref in the frame of L̂_N there, f22_ref = 0 meaning f22_start, φ_ref, inclination,
-longAscNodes; numbers without units are SI, as gwsignal reads them.  pnrotor's own options and LAL's PN orders
-(``amplitude_order``, ``phase_order``, ``spin_order``: LAL's integers, −1 pnrotor's default) are given to the
-generator or, per call, in the parameters (bilby passes its extra waveform arguments that way); ``lmax`` > 0 sets
-ℓ_max.  With ``condition=1``, gwsignal's own conditioning (``conditioning_routines='gwsignal'``) tapers and
+longAscNodes, and the tidal deformabilities lambda1, lambda2; numbers without units are SI, as gwsignal reads them.
+pnrotor's own options and LAL's PN orders (``amplitude_order``, ``phase_order``, ``spin_order``, ``tidal_order``:
+LAL's integers, −1 pnrotor's default and all tidal terms) are given to the generator or, per call, in the parameters
+(bilby passes its extra waveform arguments that way); ``lmax`` > 0 sets ℓ_max.  With ``condition=1``, gwsignal's own conditioning (``conditioning_routines='gwsignal'``) tapers and
 high-passes the time domain and makes ``GenerateFDWaveform`` possible; it knows f22_ref = 0 only for its NRSurr,
 so give a nonzero f22_ref there.  Bad input raises the ``ValueError`` that gwsignal maps LAL's input domain errors
 to, ``"Input domain error: "`` with pnrotor's message (bilby's ``catch_waveform_errors`` recognizes it).
@@ -40,7 +40,7 @@ UNITS = {"mass1": u.kg, "mass2": u.kg, "deltaT": u.s, "f22_start": u.Hz, "f22_re
          "lambda2": u.dimensionless_unscaled,
          **{f"spin{i}{c}": u.dimensionless_unscaled for i in (1, 2) for c in "xyz"}}
 """The gwsignal parameters read here, with the SI unit of a number given without one."""
-UNMODELLED = {"eccentricity": 0.0, "meanPerAno": 0.0, "lambda1": 0.0, "lambda2": 0.0, "ModeArray": None}
+UNMODELLED = {"eccentricity": 0.0, "meanPerAno": 0.0, "ModeArray": None}
 """gwsignal parameters of physics pnrotor does not model, with the values that leave it out."""
 IGNORED = ("condition", "deltaF", "f_max")
 """gwsignal parameters of the conditioning and the frequency domain, which the time domain does not use (nor does
@@ -106,6 +106,7 @@ class PNRotorGenerator(CompactBinaryCoalescenceGenerator):
         lmax = params.get("lmax", 0)
         if lmax:
             options.setdefault("ell_max", lmax)
+        options.update({key: _value(params, key) for key in ("lambda1", "lambda2") if key in params})
         for key in ("mass1", "mass2"):
             if key not in params:
                 raise ValueError(f"PNRotorGenerator needs {key}")

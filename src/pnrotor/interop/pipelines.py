@@ -22,11 +22,17 @@ LALSimInspiralSpinTaylor.c; checked against it sample by sample in tests/test_pi
   which keep the 3.5PN and 4PN spin-orbit terms of v̇ that LAL's SpinTaylorT4 leaves out: ``spin_order=6`` is LAL's
   truncation, :func:`pnrotor.pn.lalsuite_orders`);
 * ``dquad_mon1``, ``dquad_mon2`` give κᵢ = 1 + dquad_monᵢ (LAL's quadparam);
+* tides: ``lambda1``, ``lambda2`` are the dimensionless deformabilities Λᵢ (pnrotor's and LAL's, None meaning 0), and
+  ``tidal_order`` is LAL's tideO: −1 all (5PN and 6PN), 12 (6PN), 10 (5PN only) or 0 none
+  (:data:`pnrotor.pn.evolve.LAL_TIDAL_ORDERS`; LAL's SpinTaylor refuses the others); they enter the orbit.  The tidal
+  terms of the amplitude (5PN to 6PN, :mod:`pnrotor.waveform.tidal`) come with ``amplitude_order=-1`` (all pnrotor
+  has) and not with an amplitude order k ≥ 0, which keeps the terms through v^k (k ≤ 7): as LAL's SpinTaylor
+  polarizations and modes, which have none;
 * the modes are ℓ ≤ ``ell_max``, by default all those the amplitude order has: ℓ enters at (ℓ − 2)/2 PN, so
   ℓ ≤ 2 + k, at most :data:`pnrotor.waveform.modes.ELL_MAX`.
 
 Every pnrotor option of :func:`pnrotor.evolve` but those the hosts set (sampling, f_min, ell_hat, n_hat,
-approximant) passes through by name, with ``ell_max``.  Bad input is a ``ValueError`` naming the parameter; each
+approximant) and ``tidal_order`` (LAL's meaning here) passes through by name, with ``ell_max``.  Bad input is a ``ValueError`` naming the parameter; each
 host turns it into its own exception.
 """
 
@@ -43,38 +49,42 @@ HOST_SET = ("sampling", "f_min", "ell_hat", "n_hat", "approximant")
 
 
 def polarizations(m1, m2, chi1, chi2, f_ref, *, inclination, distance, delta_t, phi_ref=0.0, f_min=None, f_max=None,
-                  ell_max=8, amplitude_order=3.5, **options):
+                  ell_max=8, amplitude_order=3.5, amplitude_tides=None, **options):
     """(t, h₊, h×) of a binary: float64 arrays, t in s (t = 0 at f_ref, samples at kΔt from f_min, or f_ref, to f_max
     or the end of the inspiral), strain at ``distance`` Mpc seen from (ι, π/2 − φ_ref) of the frame (n̂, λ̂, ℓ̂) at
-    f_ref; ``options`` go to :func:`pnrotor.evolve`.
+    f_ref; ``options`` go to :func:`pnrotor.evolve`, ``amplitude_tides`` is the modes' ``tidal_order`` (None: the
+    run's; 0: no tidal amplitude terms).
 
-    The one call the plugins make for polarizations: today :func:`pnrotor.evolve` → :func:`pnrotor.modes` →
-    :meth:`~pnrotor.waveform.modes.Modes.polarizations`."""
-    m = modes(m1, m2, chi1, chi2, f_ref, distance=distance, delta_t=delta_t, f_min=f_min, f_max=f_max,
-              ell_max=ell_max, amplitude_order=amplitude_order, **options)
-    hp, hc = m.polarizations(inclination, phi_ref)
-    return m.t_seconds, hp, hc
+    The one call the plugins make for polarizations: ``pnrotor.polarizations``' streamed route (h₊, h× computed from
+    the integrator's dense output, :mod:`pnrotor.waveform.stream`), with the modes' tidal order of its own."""
+    from pnrotor import stream
+
+    p = stream(m1, m2, chi1, chi2, f_ref, delta_t=delta_t, f_min=f_min, f_max=f_max, **options).polarizations(
+        inclination=inclination, distance=distance, phi_ref=phi_ref, ell_max=ell_max, amplitude_order=amplitude_order,
+        tidal_order=amplitude_tides).compute()
+    return p.t_seconds, p.h_plus, p.h_cross
 
 
 def modes(m1, m2, chi1, chi2, f_ref, *, distance, delta_t, f_min=None, f_max=None, ell_max=8, amplitude_order=3.5,
-          **options):
+          amplitude_tides=None, **options):
     """:class:`pnrotor.waveform.modes.Modes` (inertial frame ẑ = ℓ̂, x̂ = n̂ at f_ref, strain at ``distance`` Mpc)
-    on the samples of :func:`polarizations`."""
-    from pnrotor import evolve
-    from pnrotor import modes as _modes
+    on the samples of :func:`polarizations`: ``pnrotor.modes``' streamed route."""
+    from pnrotor import stream
 
-    run = evolve(m1, m2, chi1, chi2, f_ref, f_min=f_min, f_max=f_max, sampling=delta_t, **options)
-    return _modes(run, ell_max=ell_max, amplitude_order=amplitude_order, distance=distance)
+    return stream(m1, m2, chi1, chi2, f_ref, delta_t=delta_t, f_min=f_min, f_max=f_max, **options).modes(
+        ell_max, amplitude_order, distance, tidal_order=amplitude_tides).compute()
 
 
 class Arguments(NamedTuple):
     """A host's SpinTaylor keywords as pnrotor's: f_ref and f_min in Hz (f_min None when the waveform starts at
-    f_ref), ℓ_max, the amplitude order (PN), and the options of :func:`pnrotor.evolve`."""
+    f_ref), ℓ_max, the amplitude order (PN), the modes' tidal order (None: the run's; 0: none), and the options of
+    :func:`pnrotor.evolve`."""
 
     f_ref: float
     f_min: float
     ell_max: int
     amplitude_order: float
+    amplitude_tides: float
     options: dict
 
 
@@ -84,7 +94,7 @@ def _evolve_options():
     from pnrotor.pn.evolve import evolve
 
     return frozenset(name for name, p in inspect.signature(evolve).parameters.items()
-                     if p.kind is p.KEYWORD_ONLY and name not in HOST_SET)
+                     if p.kind is p.KEYWORD_ONLY and name not in HOST_SET + ("tidal_order",))
 
 
 def _lal_order(value, name, highest):
@@ -98,9 +108,10 @@ def _lal_order(value, name, highest):
     return None if k == -1 else k / 2
 
 
-def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, spin_order=-1, dquad_mon1=None,
-              dquad_mon2=None, **options):
+def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, spin_order=-1, tidal_order=-1,
+              dquad_mon1=None, dquad_mon2=None, lambda1=None, lambda2=None, **options):
     """:class:`Arguments` from the SpinTaylor keywords (module docstring); a ValueError naming the first bad one."""
+    from pnrotor.pn.evolve import LAL_TIDAL_ORDERS
     from pnrotor.pn.initial import _real
     from pnrotor.pn.settings import MAX_SO_ORDER, MAX_SS_ORDER
     from pnrotor.waveform.modes import ELL_MAX
@@ -124,17 +135,24 @@ def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, s
     if f_ref < f_lower:
         raise ValueError(f"f_ref = {f_ref!r} Hz must not be below f_lower = {f_lower!r} Hz (or 0, meaning f_lower)")
     order = _lal_order(amplitude_order, "amplitude_order", 7)
+    amplitude_tides = None if order is None else 0.0
     order = 3.5 if order is None else order
     ell_max = options.pop("ell_max", None)
     if ell_max is None:
         ell_max = min(ELL_MAX, 2 + int(2 * order))
     pn_order = _lal_order(phase_order, "phase_order", 9)
     spin = _lal_order(spin_order, "spin_order", 8)
+    tides = LAL_TIDAL_ORDERS.get(float(tidal_order) if _real(tidal_order) else None)
+    if tides is None:
+        raise ValueError(f"tidal_order must be -1 (all: 5PN and 6PN), 12 (6PN), 10 (5PN) or 0 (none), LAL's tideO; "
+                         f"got {tidal_order!r}")
+    options["tidal_order"] = tides
     given = (("phase_order", "pn_order", pn_order),
              ("spin_order", "spin_orbit_order", None if spin is None else min(spin, MAX_SO_ORDER)),
              ("spin_order", "spin_spin_order", None if spin is None else min(spin, MAX_SS_ORDER)),
              ("dquad_mon1", "kappa1", None if dquad_mon1 is None else 1.0 + dquad_mon1),
-             ("dquad_mon2", "kappa2", None if dquad_mon2 is None else 1.0 + dquad_mon2))
+             ("dquad_mon2", "kappa2", None if dquad_mon2 is None else 1.0 + dquad_mon2),
+             ("lambda1", "lambda1", lambda1), ("lambda2", "lambda2", lambda2))
     for keyword, name, value in given:
         if value is None:
             continue
@@ -142,7 +160,7 @@ def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, s
             raise ValueError(f"give either {keyword} or pnrotor's {name}, not both")
         options[name] = value
     return Arguments(f_ref, None if f_ref == f_lower else f_lower, ell_max, order,
-                     dict(options, approximant=approximant))
+                     amplitude_tides, dict(options, approximant=approximant))
 
 
 def _check_masses(m1, m2):
@@ -173,7 +191,7 @@ def spintaylor_polarizations(approximant, m1, m2, chi1, chi2, *, distance, incli
     a = arguments(approximant, f_lower, f_ref, **keywords)
     t, hp, hc = polarizations(m1, m2, chi1, chi2, a.f_ref, inclination=inclination, distance=distance,
                               delta_t=delta_t, phi_ref=phi_ref, f_min=a.f_min, ell_max=a.ell_max,
-                              amplitude_order=a.amplitude_order, **a.options)
+                              amplitude_order=a.amplitude_order, amplitude_tides=a.amplitude_tides, **a.options)
     if long_asc_nodes:
         c, s = math.cos(2.0 * long_asc_nodes), math.sin(2.0 * long_asc_nodes)
         hp, hc = c * hp + s * hc, c * hc - s * hp
@@ -187,7 +205,7 @@ def spintaylor_modes(approximant, m1, m2, chi1, chi2, *, distance, delta_t, f_lo
     _check_masses(m1, m2)
     a = arguments(approximant, f_lower, f_ref, **keywords)
     m = modes(m1, m2, chi1, chi2, a.f_ref, distance=distance, delta_t=delta_t, f_min=a.f_min, ell_max=a.ell_max,
-              amplitude_order=a.amplitude_order, **a.options)
+              amplitude_order=a.amplitude_order, amplitude_tides=a.amplitude_tides, **a.options)
     return _epoch(m.t_seconds, delta_t), m
 
 

@@ -17,10 +17,12 @@ FFT), which needs the length estimator (PyCBC's TaylorF2 chirp time, as for its 
 frequency (:func:`end_frequency`) for its sampling.  That route sets f_ref to f_lower whatever is given (PyCBC
 2.11 tests for a key ``'f_fref'``).
 
-Bad input raises PyCBC's ``FailedWaveformError`` with pnrotor's message; so do unmodelled physics with a
-non-default value (eccentricity, tides, testing-GR parameters, mode_array, frame_axis, modes_choice, numrel_data)
-and keywords that are neither PyCBC's parameters nor pnrotor's options.  Importing this module is cheap (PyCBC
-loads it at ``import pycbc.waveform``): numba and pnrotor's PN code are imported at the first waveform.
+Tides: ``lambda1``, ``lambda2`` and ``tidal_order`` (LAL's tideO) as for SpinTaylorT4
+(:mod:`pnrotor.interop.pipelines`).  Bad input raises PyCBC's ``FailedWaveformError`` with pnrotor's message; so do
+unmodelled physics with a non-default value (eccentricity, octupolar tides and f-modes, testing-GR parameters,
+mode_array, frame_axis, modes_choice, numrel_data) and keywords that are neither PyCBC's parameters nor pnrotor's
+options.  Importing this module is cheap (PyCBC loads it at ``import pycbc.waveform``): numba and pnrotor's PN code
+are imported at the first waveform.
 """
 
 import functools
@@ -34,8 +36,8 @@ APPROXIMANTS = {f"PNRotor{a}": a for a in pipelines.APPROXIMANTS}
 
 UNMODELLED = {"eccentricity": (0.0,), "mean_per_ano": (0.0,), "modes_choice": (0,), "mode_array": (None,),
               "numrel_data": ("", None), "frame_axis": (0, 2),
-              **{key: (None, 0.0) for key in ("lambda1", "lambda2", "lambda_octu1", "lambda_octu2", "quadfmode1",
-                                              "quadfmode2", "octufmode1", "octufmode2")}}
+              **{key: (None, 0.0) for key in ("lambda_octu1", "lambda_octu2", "quadfmode1", "quadfmode2", "octufmode1",
+                                              "octufmode2")}}
 """PyCBC parameters of physics or options pnrotor does not model, with the values that leave them out (frame_axis 0
 is PyCBC's "LAL's default", 2 that default, ORBITAL_L, named); the testing-GR parameters (dchi0 …, dalpha1 …,
 dbeta1 …) must be 0."""
@@ -47,7 +49,8 @@ def _leaves_out(value, allowed):
                for a in allowed)
 
 
-SPINTAYLOR = ("amplitude_order", "phase_order", "spin_order", "dquad_mon1", "dquad_mon2")
+SPINTAYLOR = ("amplitude_order", "phase_order", "spin_order", "tidal_order", "dquad_mon1", "dquad_mon2", "lambda1",
+              "lambda2")
 """PyCBC's keywords that :func:`pnrotor.interop.pipelines.arguments` maps."""
 
 

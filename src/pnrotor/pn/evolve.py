@@ -559,8 +559,12 @@ def lalsuite_orders(approximant, phaseO=7, spinO=-1, tideO=-1):
     a = normalize_approximant(approximant)
     if spinO != -1 or phaseO not in (7, -1):
         raise ValueError("only phaseO = 7 (or -1) with spinO = -1 is mapped")
-    tides = {-1: 6.0, 12: 6.0, 10: 5.0, 0: 0.0}
-    if tideO not in tides:
+    if tideO not in LAL_TIDAL_ORDERS:
         raise ValueError(f"tideO must be one of -1 (all), 12, 10 or 0, got {tideO!r}")
     return {"pn_order": 3.5, "spin_orbit_order": 2.5 if a == "T1" else 3.0, "spin_spin_order": 3.0,
-            "precession_phase_shift": True, "tidal_order": tides[tideO]}
+            "precession_phase_shift": True, "tidal_order": LAL_TIDAL_ORDERS[tideO]}
+
+
+LAL_TIDAL_ORDERS = {-1: 6.0, 12: 6.0, 10: 5.0, 0: 0.0}
+"""LALSuite SpinTaylor's tideO (``LAL_SIM_INSPIRAL_TIDAL_ORDER_ALL`` −1, ``_6PN`` 12, ``_5PN`` 10, ``_0PN`` 0;
+LALSimInspiralWaveformFlags.h; its SpinTaylor set-up refuses the others) → ``tidal_order``."""

@@ -36,7 +36,9 @@ Newtonian time, :func:`~pnrotor.pn.evolve.half`); a single run that hit its own 
 """
 
 import gc
+import inspect
 import math
+import sys
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -58,7 +60,7 @@ from .sampling import _fill_history, output_mode
 from .settings import Binaries, binary_settings, options, population_settings, target_v
 from .system import EV_V_END, N_EVENTS, P_VEND
 
-__all__ = ["evolve_many", "Population"]
+__all__ = ["evolve_many", "Population", "spin_angles", "INSPIRAL_ENDS"]
 
 CHUNK = 4096
 """Binaries prepared and integrated together: bounds the memory of their parameter vectors (~10 kB each)."""
@@ -68,10 +70,126 @@ dispatch, and at most that left for one thread at the end (or after an interrupt
 
 
 
+INSPIRAL_ENDS = ("v_max", "energy_balance", "vdot_nonpositive", "vdot_peak", "vdot_divergent")
+"""Terminations that end an inspiral (:mod:`pnrotor.pn.evolve`): a binary integrated to the end of its inspiral
+(no target frequency) reached it with one of these; the others (``max_steps``, ``step_underflow``, ``nonfinite``,
+``time_limit``, ``spin_magnitude``) stop it before."""
+
+STATE = ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat")
+"""The fields of a :class:`Population` that hold a state (NaN where the target was not reached)."""
+
+PER_BINARY = ("m1_Msun", "m2_Msun", "chi1", "chi2", "f_ref_Hz", "ell_hat", "n_hat", "kappa1", "kappa2", "lambda1",
+              "lambda2", "f_end_Hz", "frequencies_Hz")
+"""The inputs of a :class:`Population` given per binary (its other inputs are the options all binaries share)."""
+
+
+def spin_angles(chi1, chi2, ell_hat, m1, m2):
+    r"""θ₁, θ₂, φ₁₂, χ_eff and χ_p of spins ``chi1``, ``chi2`` and orbital direction ``ell_hat`` (arrays (..., 3),
+    inertial frame) and masses ``m1``, ``m2`` (broadcast against (...)) → dict of arrays (...):
+
+    * tilts θᵢ = atan2(|χᵢ × ℓ̂|, χᵢ·ℓ̂) ∈ [0, π], the angle between χᵢ and ℓ̂ (NaN where χᵢ = 0);
+    * φ₁₂ = atan2(ℓ̂·(χ₁ × χ₂), χ₁·χ₂ − (χ₁·ℓ̂)(χ₂·ℓ̂)) taken in [0, 2π]: the azimuth of χ₂'s projection on the
+      orbital plane minus that of χ₁'s, counterclockwise about ℓ̂ (LALSuite's and bilby's ``phi_12``; NaN where a
+      projection is zero);
+    * χ_eff = (m₁ χ₁·ℓ̂ + m₂ χ₂·ℓ̂)/(m₁ + m₂) (Ajith et al. 2011, PRL 106, 241101, Eq. (1));
+    * χ_p = max(χ_A⊥, q (4q + 3)/(4 + 3q) χ_B⊥), A the heavier body, B the lighter, q = m_B/m_A ≤ 1 and χᵢ⊥ =
+      |χᵢ × ℓ̂| (Schmidt, Ohme & Hannam 2015, PRD 91, 024043, Eq. (3.4)).
+    """
+    chi1, chi2, ell_hat = (np.asarray(x, dtype=np.float64) for x in (chi1, chi2, ell_hat))
+    m1, m2 = np.asarray(m1, dtype=np.float64), np.asarray(m2, dtype=np.float64)
+    along1, along2 = (np.einsum("...i,...i", chi, ell_hat) for chi in (chi1, chi2))
+    across1, across2 = (np.linalg.norm(np.cross(chi, ell_hat), axis=-1) for chi in (chi1, chi2))
+    with np.errstate(invalid="ignore"):
+        theta1, theta2 = (np.where(np.linalg.norm(chi, axis=-1) > 0.0, np.arctan2(across, along), np.nan)
+                          for chi, along, across in ((chi1, along1, across1), (chi2, along2, across2)))
+        phi12 = np.arctan2(np.einsum("...i,...i", ell_hat, np.cross(chi1, chi2)),
+                           np.einsum("...i,...i", chi1, chi2) - along1 * along2)
+        phi12 = np.where(across1 * across2 > 0.0, np.where(phi12 < 0.0, phi12 + 2.0 * np.pi, phi12), np.nan)
+        heavy = m1 >= m2
+        q = np.where(heavy, m2 / m1, m1 / m2)
+        chi_p = np.maximum(np.where(heavy, across1, across2),
+                           q * (4.0 * q + 3.0) / (4.0 + 3.0 * q) * np.where(heavy, across2, across1))
+    return {"theta1": theta1, "theta2": theta2, "phi12": phi12, "chi_eff": (m1 * along1 + m2 * along2) / (m1 + m2),
+            "chi_p": chi_p}
+
+
+class SpinAngles:
+    """The derived quantities of :func:`spin_angles` at each state, as properties, and the whole table as a pandas
+    DataFrame: shared by :class:`Population` and `pnrotor.batch.population.PopulationTable` (whose ``inputs`` hold
+    ``m1_Msun`` and ``m2_Msun`` per binary)."""
+
+    def derived(self):
+        """:func:`spin_angles` of the states (NaN where the target was not reached): dict of (N,) or (N, K)."""
+        shape = self.v.shape
+        m1, m2 = (self.inputs[key].reshape(self.inputs[key].shape + (1,) * (self.v.ndim - 1))
+                  for key in ("m1_Msun", "m2_Msun"))
+        return spin_angles(self.chi1, self.chi2, self.ell_hat, np.broadcast_to(m1, shape), np.broadcast_to(m2, shape))
+
+    theta1 = property(lambda self: self.derived()["theta1"], doc="tilt of χ₁ from ℓ̂ (rad; :func:`spin_angles`)")
+    theta2 = property(lambda self: self.derived()["theta2"], doc="tilt of χ₂ from ℓ̂ (rad; :func:`spin_angles`)")
+    phi12 = property(lambda self: self.derived()["phi12"], doc="φ₁₂ (rad; :func:`spin_angles`)")
+    chi_eff = property(lambda self: self.derived()["chi_eff"], doc="χ_eff (:func:`spin_angles`)")
+    chi_p = property(lambda self: self.derived()["chi_p"], doc="χ_p (:func:`spin_angles`)")
+
+    def to_pandas(self):
+        """A pandas DataFrame of the table, one row per binary (per binary and target with a list of frequencies:
+        columns ``binary`` and ``target``): the per-binary inputs (vectors at f_ref as ``chi1_ref_x`` …, a
+        target of the list as ``frequency_Hz``), the state (vectors as ``chi1_x`` …, ``R_w`` … ``R_z``),
+        ``termination``, ``reached``, ``message``, ``nsteps``, ``nfev``, the derived ``theta1``, ``theta2``,
+        ``phi12``, ``chi_eff``, ``chi_p``, and the states where the integrations stopped (``stopped_v`` …); the
+        options every binary shares in ``DataFrame.attrs``."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("to_pandas needs pandas: pip install 'pnrotor[pandas]'") from None
+
+        n, shape = len(self), self.v.shape
+        columns = {}
+        if self.v.ndim == 2:
+            columns["binary"], columns["target"] = (x.ravel() for x in np.indices(shape))
+
+        def add(name, x, per_binary=False):
+            x = np.asarray(x)
+            if per_binary and self.v.ndim == 2:
+                x = np.broadcast_to(x.reshape((n, 1) + x.shape[1:]), shape + x.shape[1:])
+            x = x.reshape((-1,) + x.shape[len(shape):])
+            if x.ndim == 1:
+                columns[name] = x
+            else:
+                for c, axis in zip(x.T, "wxyz" if x.shape[1] == 4 else "xyz"):
+                    columns[f"{name}_{axis}"] = c
+
+        if getattr(self, "name", None) is not None:
+            add("name", self.name, True)
+        shared = {}
+        for key, value in self.inputs.items():
+            if not (isinstance(value, np.ndarray) and value.shape[:1] == (n,)):
+                shared[key] = value
+            elif key == "frequencies_Hz":
+                add("frequency_Hz", value)
+            else:
+                add(key + "_ref" * (value.ndim == 2), value, True)
+        for key in STATE + ("termination", "reached", "message", "nsteps", "nfev"):
+            add(key, getattr(self, key))
+        for key, value in self.derived().items():
+            add(key, value)
+        for key in STATE:
+            add("stopped_" + key, self.stopped_at[key])
+        frame = pd.DataFrame(columns)
+        frame.attrs.update(shared)
+        return frame
+
+
 @dataclass
-class Population:
+class Population(SpinAngles):
     """The states of :func:`evolve_many`: row i is binary i, with a second axis k over the target
-    frequencies when ``frequencies`` was given (NaN where ``termination`` is ``'invalid'``).
+    frequencies when ``frequencies`` was given.
+
+    The state fields (t … ell_hat) hold the state at the target: the target frequency, or the end of the inspiral
+    where there is none.  Where ``reached`` is False they are NaN (an inspiral that ended first, an integration
+    stopped by the integrator's limits, or ``'invalid'``), and ``stopped_at`` holds the state where the integration
+    stopped.  Derived at the states (properties, :func:`spin_angles` for the formulas): ``theta1``, ``theta2``,
+    ``phi12``, ``chi_eff``, ``chi_p``; :meth:`to_pandas` gives them all as one DataFrame.
 
     Attributes
     ----------
@@ -82,13 +200,19 @@ class Population:
     R : (N, 4) or (N, K, 4) unit orbital-frame rotor (n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹)
     ell_hat : (N, 3) or (N, K, 3) orbital angular momentum direction
     termination : str — why the integration to that state stopped (:mod:`pnrotor.pn.evolve`): ``'f_max'`` or
-        ``'f_min'`` where the target frequency was reached, else why the inspiral ended first (the state is
-        then that end's), or ``'invalid'``
+        ``'f_min'`` where the target frequency was reached, else why the inspiral ended first, or ``'invalid'``
+    reached : bool — whether the integration reached the target: termination ``'f_max'`` or ``'f_min'`` for a
+        target frequency, one of :data:`INSPIRAL_ENDS` for the end of the inspiral
     message : str — the termination's message, or the error naming the bad input
     nsteps, nfev : int — the step attempts and right-hand-side evaluations of the integration that gave the
         state (one per binary and direction: the targets of a list share it; with nearer targets it keeps
         dense output, 3 more evaluations per step than a single ``evolve``)
-    inputs : dict — the options shared by every binary
+    stopped_at : dict — the state fields (:data:`STATE`) where each integration stopped, reached or not (NaN where
+        ``'invalid'``); equal to the state fields where ``reached``
+    inputs : dict — the options shared by every binary, and per binary (arrays (N,) or (N, 3)): ``m1_Msun``,
+        ``m2_Msun``, ``chi1``, ``chi2`` (at f_ref), ``f_ref_Hz``, ``ell_hat``, ``n_hat``, ``kappa1``, ``kappa2``,
+        ``lambda1``, ``lambda2``, and the target, ``f_end_Hz`` (NaN: the end of the inspiral) or ``frequencies_Hz``
+        (N, K)
     stats : dict — ``wall_time_s`` of the call and ``wall_time_integrate_s`` of its compiled loops (the rest is
         Python: checks and parameter vectors)
 
@@ -105,9 +229,11 @@ class Population:
     R: np.ndarray
     ell_hat: np.ndarray
     termination: np.ndarray
+    reached: np.ndarray
     message: np.ndarray
     nsteps: np.ndarray
     nfev: np.ndarray
+    stopped_at: dict
     inputs: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
 
@@ -356,16 +482,117 @@ def _refused_targets(f, m1, m2, f_ref):
     return refused
 
 
-def evolve_many(m1, m2, chi1, chi2, f_ref, *, f_end=None, frequencies=None, ell_hat=(0.0, 0.0, 1.0),
+def _is_frame(x):
+    """Whether x is a pandas DataFrame (pandas is not imported for that)."""
+    pandas = sys.modules.get("pandas")
+    return pandas is not None and isinstance(x, pandas.DataFrame)
+
+
+_FRAME_SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order",
+                 "horizon_absorption")
+"""The columns of a batch table that a DataFrame may hold for the options evolve_many shares (one value each)."""
+
+
+def _from_frame(frame, given, f_end, frequencies, shared, lambdas):
+    """evolve_many's per-binary inputs from a DataFrame with a batch table's columns (evolve_many's docstring) →
+    (m1, m2, chi1, chi2, f_ref, f_end, backward: where the target is an f_min, or None, lambda1, lambda2: the
+    columns, or where absent the values ``lambdas`` gives); the options its columns hold go into ``shared``.  A
+    ValueError names the column (and row) that does not fit."""
+    from pandas.api.types import is_bool_dtype, is_numeric_dtype
+
+    from pnrotor.parameters import COLUMNS, REQUIRED
+
+    twice = [name for name, x in given.items() if x is not None]
+    if twice:
+        raise ValueError(f"{', '.join(twice)} must not be given with a DataFrame: its columns hold them")
+    unknown = [repr(c) for c in frame.columns if c not in COLUMNS]
+    missing = [c for c in REQUIRED if c not in frame.columns]
+    if unknown or missing or frame.columns.has_duplicates or not len(frame):
+        raise ValueError("the DataFrame of binaries must have the columns " + ", ".join(REQUIRED)
+                         + f" and may have {', '.join(c for c in COLUMNS if c not in REQUIRED)}, each once, and a row"
+                         + (f"; unknown: {', '.join(unknown)}" if unknown else "")
+                         + (f"; missing: {', '.join(missing)}" if missing else ""))
+
+    def numbers(name):
+        column = frame[name]
+        if not is_numeric_dtype(column) or is_bool_dtype(column):
+            raise ValueError(f"column {name} of the DataFrame must be numbers (not booleans or text), got dtype "
+                             f"{column.dtype}")
+        return column.to_numpy(dtype=np.float64, na_value=np.nan)
+
+    def vectors(name):
+        rows = []
+        for label, cell in frame[name].items():
+            try:
+                x = [float(item) for item in cell.split(",")] if isinstance(cell, str) else cell
+                x = np.asarray(x, dtype=np.float64)
+                if x.shape != (3,):
+                    raise ValueError
+            except (TypeError, ValueError):
+                raise ValueError(f"column {name} of the DataFrame must hold three numbers per row (a sequence or "
+                                 f"\"x,y,z\" text); row {label!r} holds {cell!r}") from None
+            rows.append(x)
+        return np.array(rows)
+
+    f_min, f_max = (numbers(name) if name in frame.columns else np.full(len(frame), np.nan) for name in ("f_min", "f_max"))
+    has_min, has_max = ~np.isnan(f_min), ~np.isnan(f_max)
+    backward = None
+    if has_min.any() or has_max.any():
+        if f_end is not None or frequencies is not None:
+            raise ValueError("the DataFrame's f_min or f_max column gives each binary its target: f_end and "
+                             "frequencies must not be given too")
+        both = frame.index[has_min & has_max]
+        if len(both):
+            raise ValueError(f"rows {', '.join(map(repr, both[:5]))}{' ...' * (len(both) > 5)} of the DataFrame have "
+                             "both f_min and f_max: evolve_many gives one state per row, at f_max (forward), at f_min "
+                             "(backward) or at the end of the inspiral")
+        f_end, backward = np.where(has_max, f_max, f_min), has_min
+    defaults = inspect.signature(evolve_many).parameters
+    for name in _FRAME_SHARED + ("sampling",):
+        values = frame[name].dropna().unique() if name in frame.columns else ()
+        if len(values) > 1:
+            raise ValueError(f"column {name} of the DataFrame holds several values ({', '.join(map(str, values[:5]))}"
+                             f"{' ...' * (len(values) > 5)}); evolve_many shares it among all binaries: call it once "
+                             "per value, or run the table with pnrotor.batch.population.run, which groups the rows")
+        if len(values) == 1:
+            value = values[0].item() if isinstance(values[0], np.generic) else values[0]
+            if name == "sampling":
+                if value != "final":
+                    raise ValueError(f"column sampling of the DataFrame must be final or empty (evolve_many gives "
+                                     f"states, not histories), got {value!r}")
+            elif shared[name] != defaults[name].default and shared[name] != value:
+                raise ValueError(f"{name} is given twice, as {shared[name]!r} and as the DataFrame's column, "
+                                 f"{value!r}")
+            else:
+                shared[name] = value
+    for name, value in lambdas.items():
+        if name in frame.columns:
+            if not (np.ndim(value) == 0 and value == defaults[name].default):
+                raise ValueError(f"{name} is given twice, as an argument and as the DataFrame's column")
+            lambdas[name] = numbers(name)
+    return (numbers("m1"), numbers("m2"), vectors("chi1"), vectors("chi2"), numbers("f_ref"), f_end, backward,
+            lambdas["lambda1"], lambdas["lambda2"])
+
+
+def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, frequencies=None, ell_hat=(0.0, 0.0, 1.0),
                 n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, approximant="T4", pn_order=3.5,
                 spin_orbit_order=None, spin_spin_order=None, atol=1e-12, rtol=0.0, rotor="coprecessing",
                 precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000,
                 lambda1=0.0, lambda2=0.0, tidal_order=None, horizon_absorption=False):
     r"""Evolve N binaries from f_ref → :class:`Population` of their states at the end of the inspiral, at
-    f_end or at a list of frequencies (module docstring).
+    f_end or at a list of frequencies (module docstring), NaN where a binary did not reach its target (its
+    ``reached`` False, the state where it stopped in ``stopped_at``).
 
     Parameters
     ----------
+    m1 : array_like (N,) or scalar, or a pandas DataFrame
+        A DataFrame is a table of binaries with the columns of a batch table (`pnrotor.parameters.COLUMNS`):
+        ``m1``, ``m2``, ``chi1``, ``chi2`` (cells of three numbers, or ``"x,y,z"`` text), ``f_ref`` per binary;
+        optional ``f_max`` (the state there, forward) or ``f_min`` (backward), at most one per row (NaN: none; with
+        neither, the end of the inspiral), instead of f_end; optional columns of the shared options
+        (``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order``, ``precession``, ``atol``,
+        ``tidal_order``, ``horizon_absorption``) holding one value each (empty cells ignored), used as that keyword; ``sampling`` empty or ``final``; ``name``
+        ignored.  m2, chi1, chi2 and f_ref are then not given.
     m1, m2, f_ref : array_like (N,) or scalar
         Masses (M☉) and reference GW frequencies (Hz), as for :func:`~pnrotor.pn.evolve.evolve` (astropy
         Quantities are converted).  N is the length of the inputs given per binary (these, the spins, f_end, …,
@@ -398,6 +625,20 @@ integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
     options or array shapes raise a ValueError; an invalid binary does not (module docstring).
     """
     wall0 = time.perf_counter()
+    shared = dict(approximant=approximant, pn_order=pn_order, spin_orbit_order=spin_orbit_order,
+                  spin_spin_order=spin_spin_order, atol=atol, rtol=rtol, sampling="final", rotor=rotor,
+                  precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
+                  precession=precession, max_steps=max_steps, tidal_order=tidal_order,
+                  horizon_absorption=horizon_absorption)
+    backward = None   # a binary's target behind f_ref (f_min): by default where it lies below f_ref
+    if _is_frame(m1):
+        m1, m2, chi1, chi2, f_ref, f_end, backward, lambda1, lambda2 = _from_frame(
+            m1, dict(m2=m2, chi1=chi1, chi2=chi2, f_ref=f_ref), f_end, frequencies, shared,
+            dict(lambda1=lambda1, lambda2=lambda2))
+    else:
+        missing = [name for name, x in (("m2", m2), ("chi1", chi1), ("chi2", chi2), ("f_ref", f_ref)) if x is None]
+        if missing:
+            raise TypeError(f"evolve_many() missing {', '.join(missing)} (or give m1 as a pandas DataFrame)")
     n = _population_size(dict(m1=m1, m2=m2, f_ref=f_ref, kappa1=kappa1, kappa2=kappa2, lambda1=lambda1,
                               lambda2=lambda2, f_end=f_end),
                          dict(chi1=chi1, chi2=chi2, ell_hat=ell_hat, n_hat=n_hat), dict(frequencies=frequencies))
@@ -409,11 +650,6 @@ integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
     l1, l2 = _per_binary(lambda1, n, "lambda1"), _per_binary(lambda2, n, "lambda2")
     c1, c2, ell, nh = (_per_binary(x, n, name, (3,)) for x, name in
                        ((chi1, "chi1"), (chi2, "chi2"), (ell_hat, "ell_hat"), (n_hat, "n_hat")))
-    shared = dict(approximant=approximant, pn_order=pn_order, spin_orbit_order=spin_orbit_order,
-                  spin_spin_order=spin_spin_order, atol=atol, rtol=rtol, sampling="final", rotor=rotor,
-                  precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
-                  precession=precession, max_steps=max_steps, tidal_order=tidal_order,
-                  horizon_absorption=horizon_absorption)
     # the shared options fail for every binary alike: check them once (a binary of the table could itself be
     # invalid, which must not raise); a reference binary carries them to population_parts
     opts = options(**shared)
@@ -422,12 +658,15 @@ integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
 
     # one row per (binary, target), row i·K + k; reshaped to (N, K) at the end
     nr = n * K
-    out = Population(t=np.full(nr, np.nan), t_seconds=np.full(nr, np.nan), v=np.full(nr, np.nan),
-                     Phi=np.full(nr, np.nan), chi1=np.full((nr, 3), np.nan), chi2=np.full((nr, 3), np.nan),
-                     R=np.full((nr, 4), np.nan), ell_hat=np.full((nr, 3), np.nan),
-                     termination=np.full(nr, "invalid", dtype=object), message=np.full(nr, "", dtype=object),
-                     nsteps=np.zeros(nr, dtype=np.int64), nfev=np.zeros(nr, dtype=np.int64),
-                     inputs={k: v for k, v in shared.items() if k != "sampling"})
+    state = dict(t=np.full(nr, np.nan), t_seconds=np.full(nr, np.nan), v=np.full(nr, np.nan), Phi=np.full(nr, np.nan),
+                 chi1=np.full((nr, 3), np.nan), chi2=np.full((nr, 3), np.nan), R=np.full((nr, 4), np.nan),
+                 ell_hat=np.full((nr, 3), np.nan))
+    out = Population(**state, termination=np.full(nr, "invalid", dtype=object), reached=np.zeros(nr, dtype=bool),
+                     message=np.full(nr, "", dtype=object), nsteps=np.zeros(nr, dtype=np.int64),
+                     nfev=np.zeros(nr, dtype=np.int64), stopped_at=state,   # the states' own arrays until the end
+                     inputs={**{k: v for k, v in shared.items() if k != "sampling"},
+                             **dict(zip(PER_BINARY, (m1a, m2a, c1, c2, fref, ell, nh, k1, k2, l1, l2))),
+                             ("frequencies_Hz" if listed else "f_end_Hz"): targets if listed else targets[:, 0]})
     ends, M_sec = np.full(nr, None, dtype=object), np.full(nr, np.nan)
     counts = np.zeros((nr, 4), dtype=np.int64)
     with np.errstate(all="ignore"):   # an invalid binary's row is never used: settings refuses it first
@@ -474,7 +713,7 @@ integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
                         f_hi[i - start] = max(f_ahead)
             else:        # one target: behind f_ref backward, else (or NaN: to the end) forward
                 f = targets[start:stop, 0]
-                back = f < fref[start:stop]
+                back = f < fref[start:stop] if backward is None else backward[start:stop]
                 f_lo, f_hi = np.where(back, f, np.nan), np.where(back, np.nan, f)
             b = population_settings(opts, m1a[start:stop], m2a[start:stop], c1[start:stop], c2[start:stop],
                                     fref[start:stop], f_lo, f_hi, ell[start:stop], nh[start:stop], k1[start:stop],
@@ -548,22 +787,30 @@ integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
                                                           forward)
                     if not forward:   # a copy with v_end = v_min
                         Ph[sel] = p
-                integrating += _integrate_group(rhs, events, mode[aligned], float(atol), float(rtol), int(max_steps),
+                integrating += _integrate_group(rhs, events, mode[aligned], float(shared["atol"]),
+                                                float(shared["rtol"]), int(shared["max_steps"]),
                                                 Y0[hq], Ph, t_end, directions, bg.R0[hq], bg.ell_hat[hq],
                                                 bg.chi1[hq], bg.chi2[hq], hrow, near_v, near_r, out, counts)
-    named = {}    # (status, event, end) → termination: a few kinds among many rows
+    named = {}    # (status, event, end) → (termination, reached): a few kinds among many rows
     for r, key in enumerate(zip(counts[:, 0].tolist(), counts[:, 1].tolist(), ends.tolist())):
         if key[2] is not None:
             if key not in named:
-                named[key] = termination(*key, reference.approximant)
-            out.termination[r] = named[key]
-            out.message[r] = TERMINATION_MESSAGES[named[key]]
+                name = termination(*key, reference.approximant)
+                # the end of the inspiral (end 'v_max': no target frequency) is reached by any of its ends
+                named[key] = name, name == key[2] or key[2] == "v_max" and name in INSPIRAL_ENDS
+            out.termination[r], out.reached[r] = named[key]
+            out.message[r] = TERMINATION_MESSAGES[out.termination[r]]
     out.nsteps[:], out.nfev[:] = counts[:, 2], counts[:, 3]
     out.t_seconds[:] = out.t * M_sec
+    for name in STATE:   # the states where the integrations stopped; those that did not reach their target: NaN
+        x = getattr(out, name)
+        out.stopped_at[name] = x.copy()   # (the dict was `state`, the states' arrays themselves)
+        x[~out.reached] = np.nan
     if listed:
-        for name in ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat", "termination", "message",
-                     "nsteps", "nfev"):
+        for name in STATE + ("termination", "reached", "message", "nsteps", "nfev"):
             x = getattr(out, name)
             setattr(out, name, x.reshape((n, K) + x.shape[1:]))
+        for name, x in out.stopped_at.items():
+            out.stopped_at[name] = x.reshape((n, K) + x.shape[1:])
     out.stats = {"wall_time_s": time.perf_counter() - wall0, "wall_time_integrate_s": integrating}
     return out

@@ -286,32 +286,19 @@ def spins_and_frame(inputs, chi1, chi2, ell_hat):
     return chi1, chi2, "z" if np.array_equal(R0, [1.0, 0.0, 0.0, 0.0]) else "rotors"
 
 
-def modes(evolution, *args, **kwargs):
-    """Inertial-frame modes h_ℓm (module docstring) as :class:`Modes`, of a run or of a binary:
-
-    * ``modes(evolution, ell_max=8, amplitude_order=3.5, distance=None, tidal_order=None, memory=False)``: of the
-      samples of ``evolution`` (an :class:`~pnrotor.pn.evolve.Evolution`), for ℓ ≤ ``ell_max`` (2 … 8) with
-      amplitude terms through ``amplitude_order`` (0 … 4 in steps of 0.5; the 4PN term is (2,2)'s), as strain at
-      ``distance`` (Mpc or an astropy length) or, without one, as r h / M.  For a run with tidal deformabilities,
-      the tidal amplitude terms (:mod:`pnrotor.waveform.tidal`) to ``tidal_order`` (0: none, 5 or 6; None: the
-      run's tidal order).  ``memory=True`` adds the nonlinear memory to the m = 0 modes (Favata 2009's closed form
-      to the amplitude order, at most 3PN: :mod:`pnrotor.waveform.memory`, which states its convention for the
-      start of the run: the memory accumulated since t → −∞);
-    * ``modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=8,
-      amplitude_order=3.5, **evolve_options)``: the same of ``pnrotor.evolve(…, sampling=delta_t)``, bitwise,
-      computed from the integrator's dense output without its history (:func:`pnrotor.waveform.stream.modes`)."""
-    if isinstance(evolution, Evolution):
-        return _modes_of_run(evolution, *args, **kwargs)
-    if _real(evolution) or hasattr(evolution, "unit"):   # a mass (a number, or an astropy Quantity)
-        from pnrotor.waveform import stream
-
-        return stream.modes(evolution, *args, **kwargs)
-    raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads) or a "
-                    f"binary's m1, m2, chi1, chi2, f_ref with delta_t=..., got {type(evolution).__name__}")
-
-
-def _modes_of_run(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None, tidal_order=None, memory=False):
-    """:func:`modes` of an Evolution."""
+def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None, tidal_order=None, memory=False):
+    """Inertial-frame modes h_ℓm (module docstring) of the samples of ``evolution`` (an
+    :class:`~pnrotor.pn.evolve.Evolution`) as :class:`Modes`, for ℓ ≤ ``ell_max`` (2 … 8) with amplitude terms
+    through ``amplitude_order`` (0 … 4 in steps of 0.5; the 4PN term is (2,2)'s), as strain at ``distance`` (Mpc or
+    an astropy length) or, without one, as r h / M.  For a run with tidal deformabilities, the tidal amplitude terms
+    (:mod:`pnrotor.waveform.tidal`) to ``tidal_order`` (0: none, 5 or 6; None: the run's tidal order).
+    ``memory=True`` adds the nonlinear memory to the m = 0 modes (Favata 2009's closed form to the amplitude order, at
+    most 3PN: :mod:`pnrotor.waveform.memory`, which states its convention for the start of the run: the memory
+    accumulated since t → −∞).  ``pnrotor.modes`` (:func:`pnrotor.waveform.stream.modes`) takes a binary's
+    parameters too."""
+    if not isinstance(evolution, Evolution):
+        raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads), got "
+                        f"{type(evolution).__name__}")
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
     memory = check_memory_flag(memory)
     from pnrotor import hdf5

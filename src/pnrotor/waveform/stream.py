@@ -18,20 +18,25 @@ t = kΔt of ``sampling=Δt`` and nothing is computed per sample until asked:
   are the one-call forms.
 
 The modes and polarizations of a block are one compiled pass, :func:`_waves`, on the threads of
-:mod:`pnrotor.threads` (parts of ≥ :data:`pnrotor.waveform.wigner.MIN_PART` samples): per block of 256 samples
+:mod:`pnrotor.threads` (parts of ≥ 1 ms of work, :func:`pnrotor.threads.run_timed`): per block of 256 samples
 (``wigner._CHUNK``) the states from the dense output (:func:`pnrotor.pn.sampling._fill_history`, the kernel of
 ``evolve``'s sampling, on the segments from the block's first), the co-orbital amplitudes and their rotation by
 𝔇 (:func:`pnrotor.waveform.amplitudes._block_start`, :func:`~pnrotor.waveform.amplitudes._block_ell`), then either
 the inertial modes stored, or, for h₊ − i h× = Σ_ℓm h_ℓm ₋₂Y_ℓm(ι, π/2 − φ_ref), the rotation taken to the frame of
 the line of sight, where the sum over m is its m = 2 term alone (:func:`_line_of_sight`): one mode per ℓ of the
-rotation's second product, summed at once, so a polarizations call forms neither a history nor a mode array.
+rotation's second product, summed at once, so a polarizations call forms neither a history nor a mode array.  A run
+whose rotors turn about ẑ alone (aligned spins in the default frame) has no rotation to make: its inertial modes
+H_ℓm e^{−imΦ} are summed with their ₋₂Y_ℓm as they are formed (:func:`_harmonics`; 30–45% less time a sample than
+the rotation, ℓ ≤ 2 to 8, measured).
 The history of :meth:`Stream.evolution` is ``_fill_history`` itself, a block at a time.
 
 The numbers are those of ``evolve(…, sampling=Δt)`` → ``modes(run, …)`` → ``Modes.polarizations(ι, φ_ref)``: the
 history and the modes bitwise (the same kernels on the same samples in the same blocks of 256: the parts and blocks
 start at multiples of 256), the polarizations to rounding (another rotation of the same modes; ≤ 2e-15 of max|h| on
 the tests' BBH, NSBH and BNS, which allow 1e-13; summing all the inertial modes, as ``Modes.polarizations`` does,
-would give them bitwise at a higher cost).  ``pnrotor.threads`` splits the samples, so the thread count does not change any of them.  The kernel holds
+would give them bitwise at a higher cost), those of a run in frame "z" bitwise (that sum, term by term, measured on
+aligned and nonspinning BBH and BNS).  ``pnrotor.threads`` splits the samples, so the thread count does not change
+any of them.  The kernel holds
 ``_fill_history`` (:mod:`pnrotor.pn.sampling`), the block functions of :mod:`pnrotor.waveform.amplitudes` and
 :func:`pnrotor.waveform.wigner._store` (numba caches per source file): after editing those, remove this module's
 ``__pycache__/stream.*.nb*``.
@@ -54,8 +59,10 @@ from pnrotor.waveform import amplitudes as _amp
 from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.waveform.modes import (ELL_MAX, Modes, _angle, _scale, check_arguments, check_memory_flag, spins_and_frame,
                                    tides_of, wave_inputs)
+from pnrotor.waveform import polarizations as _pol
+from pnrotor.waveform.modes import modes as modes_of_run
 from pnrotor.waveform.polarizations import Polarizations
-from pnrotor.waveform.wigner import _CHUNK, MIN_PART, _store
+from pnrotor.waveform.wigner import _CHUNK, _store
 
 __all__ = ["stream", "Stream", "Streamed", "polarizations", "modes"]
 
@@ -153,7 +160,7 @@ class Stream:
         inputs = dict(self.inputs, ell_max=ell_max, amplitude_order=order2 / 2,
                       distance_Mpc=np.nan if distance_Mpc is None else distance_Mpc, **wave_inputs(tides, memory))
         scale = 1.0 if distance_Mpc is None else _scale(None, distance_Mpc, self.settings.M_sec)
-        args = self._wave_arguments(ell_max, order2, scale, tides, memory)
+        args, _ = self._wave_arguments(ell_max, order2, scale, tides, memory)
         count = n_modes(ell_max)
 
         def block(lo, hi):
@@ -178,9 +185,8 @@ class Stream:
             raise ValueError("distance is required: h+ and hx are strain at that distance (Mpc, or an astropy length)")
         inclination, phi_ref = _angle(inclination, "inclination"), _angle(phi_ref, "phi_ref")
         tides, memory = tides_of(self.inputs, tidal_order), check_memory_flag(memory)
-        Rn, weights = _line_of_sight(inclination, 0.5 * np.pi - phi_ref, ell_max)
-        args = self._wave_arguments(ell_max, order2, _scale(None, distance_Mpc, self.settings.M_sec), tides, memory,
-                                    Rn)
+        args, weights = self._wave_arguments(ell_max, order2, _scale(None, distance_Mpc, self.settings.M_sec), tides,
+                                             memory, (inclination, 0.5 * np.pi - phi_ref))
         inputs = dict(self.inputs, ell_max=ell_max, amplitude_order=order2 / 2, **wave_inputs(tides, memory))
 
         def block(lo, hi):
@@ -192,10 +198,13 @@ class Stream:
         return Streamed(self, "Polarizations", block, 24, f"polarizations(ell_max={ell_max}, ...)",
                         "a larger delta_t or a shorter span (f_min, f_max)")
 
-    def _wave_arguments(self, ell_max, order2, scale, tides, memory, Rn=None):
-        """The arguments of :func:`_waves` fixed by the run and the modes asked for, up to its weights and outputs:
-        for the inertial modes, or with ``Rn`` for the modes in the frame R_n⁻¹ R (the rotor of the line of sight,
-        :func:`_line_of_sight`) whose m = 2 the polarizations take (only those of the rotation's second product)."""
+    def _wave_arguments(self, ell_max, order2, scale, tides, memory, direction=None):
+        """The arguments of :func:`_waves` fixed by the run and the modes asked for, up to its weights and outputs, and
+        its weights: for the inertial modes (none), or, given the ``direction`` (ι, φ) of a line of sight, for the
+        polarizations seen from it: of a run whose rotors turn about ẑ alone (frame "z": an aligned run in the default
+        frame, h_ℓm = H_ℓm e^{−imΦ}) the inertial modes' ₋₂Y_ℓm(ι, φ) (:func:`_harmonics`), else the rotor R_n of the
+        line of sight and w_ℓ (:func:`_line_of_sight`), for the modes in the frame R_n⁻¹ R whose m = 2 the
+        polarizations take (only those of the rotation's second product)."""
         s, inputs = self.settings, self.inputs
         if s.use_aligned:
             chi1, chi2, frame = spins_and_frame(inputs, s.chi1, s.chi2, s.ell_hat)
@@ -205,13 +214,17 @@ class Stream:
         *terms, first, rows, coefs = _amp.kernel_terms(s.m1, s.m2, ell_max, order2, s.kappa1, s.kappa2,
                                                        inputs["spin_content"] != "nonspinning", constant, tides,
                                                        memory)
-        if Rn is None:
-            Rn = _NONE
-        else:
+        if not np.any(terms[10] > _amp._Q_LOG):   # no term of a spin quantity (kernel_terms' q) at this order: the
+            spins = 0                            # spins are not taken into the orbital frame per sample
+        Rn, weights = _NONE, _NONE
+        if direction is not None and frame == "z":
+            weights = _harmonics(*direction, ell_max, *terms[7:9])   # kernel_terms' ell_start, target
+        elif direction is not None:
+            Rn, weights = _line_of_sight(*direction, ell_max)
             frame = "rotors"
             first, rows, coefs = _m2_plan(first, rows, coefs, ell_max)
         return (self._mode, *self._forward, *self._backward, self._n_back, self._k_lo, self._dt, s.M_sec,
-                *self._fixed, Rn, spins, _amp._FRAME_CODES[frame], float(scale), *terms, first, rows, coefs)
+                *self._fixed, Rn, spins, _amp._FRAME_CODES[frame], float(scale), *terms, first, rows, coefs), weights
 
     def _run(self, args, weights, outputs, lo, hi):
         """:func:`_waves` over samples lo … hi−1 into ``outputs`` (those of sample lo first), in parts on the
@@ -221,7 +234,7 @@ class Stream:
 
             numba_cache.wait_for_aside("waves")
         call = (*args, weights, *outputs, lo)
-        threads.run(lambda a, b: _waves(*call, lo + a, lo + b), threads.parts(hi - lo, MIN_PART, _CHUNK))
+        threads.run_timed(lambda a, b: _waves(*call, lo + a, lo + b), hi - lo, _CHUNK)
 
 
 def _line_of_sight(inclination, phi, ell_max):
@@ -238,6 +251,22 @@ def _line_of_sight(inclination, phi, ell_max):
     ci, si = math.cos(0.5 * inclination), math.sin(0.5 * inclination)
     Rn = np.array([c * ci, -s * si, c * si, s * ci])   # (c, 0, 0, s)(ci, 0, si, 0)
     return Rn, np.sqrt((2.0 * np.arange(ell_max + 1) + 1.0) / (4.0 * math.pi))
+
+
+def _harmonics(inclination, phi, ell_max, ell_start, target):
+    """₋₂Y_ℓm(ι, φ) of the modes ℓ ≤ ell_max (:func:`pnrotor.waveform.polarizations.swsh`), as (re, im) pairs in
+    :func:`~pnrotor.waveform.layout.mode_index` order, h₊ − i h× = Σ_ℓm h_ℓm ₋₂Y_ℓm being what
+    :meth:`~pnrotor.waveform.modes.Modes.polarizations` sums; 0 for the modes no amplitude term of
+    :func:`~pnrotor.waveform.amplitudes.kernel_terms` (``ell_start``, ``target``: rows ℓ ± m of its block array) reaches,
+    which the kernel skips."""
+    n_pow = 2 * ell_max + 1
+    out = np.zeros((n_modes(ell_max), 2))
+    for ell in range(2, ell_max + 1):
+        for m in {abs(int(t) % n_pow - ell) for t in target[ell_start[ell]:ell_start[ell + 1]]}:
+            for sign in (1, -1) if m else (1,):
+                y = complex(_pol.swsh(-2, ell, sign * m, inclination, phi))
+                out[mode_index(ell, sign * m)] = y.real, y.imag
+    return out.ravel()
 
 
 def _m2_plan(first, rows, coefs, ell_max):
@@ -326,12 +355,26 @@ def polarizations(m1, m2, chi1, chi2, f_ref, *, inclination, distance, delta_t, 
     return p.t_seconds, p.h_plus, p.h_cross
 
 
-def modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=ELL_MAX,
-          amplitude_order=AMPLITUDE_ORDER, memory=False, **options):
-    """:class:`~pnrotor.waveform.modes.Modes` of the binary (``pnrotor.evolve``'s parameters and ``options``) at t = k
-    ``delta_t`` seconds: those of ``pnrotor.modes(pnrotor.evolve(…, sampling=delta_t), ell_max, amplitude_order,
-    distance, memory=memory)``, bitwise, computed in one pass from the integrator's dense output without forming its history
-    (``pnrotor.modes`` with a binary's parameters)."""
+def modes(m1, *args, **kwargs):
+    """Inertial-frame modes h_ℓm as :class:`~pnrotor.waveform.modes.Modes` (``pnrotor.modes``), of a run or of a binary:
+
+    * ``modes(evolution, ell_max=8, amplitude_order=3.5, distance=None, tidal_order=None, memory=False)``: of the
+      samples of an :class:`~pnrotor.pn.evolve.Evolution` (:func:`pnrotor.waveform.modes.modes`);
+    * ``modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=8,
+      amplitude_order=3.5, memory=False, **evolve_options)``: those of ``pnrotor.modes(pnrotor.evolve(…,
+      sampling=delta_t), ell_max, amplitude_order, distance, memory=memory)``, bitwise, computed in one pass from the
+      integrator's dense output without forming its history."""
+    if isinstance(m1, Evolution):
+        return modes_of_run(m1, *args, **kwargs)
+    if not (_ini._real(m1) or hasattr(m1, "unit")):   # a mass: a number, or an astropy Quantity
+        raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads) or a "
+                        f"binary's m1, m2, chi1, chi2, f_ref with delta_t=..., got {type(m1).__name__}")
+    return _binary_modes(m1, *args, **kwargs)
+
+
+def _binary_modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=ELL_MAX,
+                  amplitude_order=AMPLITUDE_ORDER, memory=False, **options):
+    """:func:`modes` of a binary."""
     check_arguments(ell_max, amplitude_order, distance)
     check_memory_flag(memory)
     return stream(m1, m2, chi1, chi2, f_ref, delta_t=delta_t, f_min=f_min, f_max=f_max, **options).modes(
@@ -380,14 +423,17 @@ def _waves(mode, fwd_t, fwd_h, fwd_c, back_t, back_h, back_c, n_back, k_lo, dt, 
     """Samples lo … hi−1 (lo a multiple of _CHUNK: the blocks of the whole run) of the run whose halves' dense outputs
     are (fwd_*, back_*), n_back samples before t = 0, t = (k_lo + i) dt, into outputs whose row 0 is sample ``base``
     (an output of size 0 is not written): t (M), t_s (s), Phi, R (N, 4), and either the inertial modes (``modes``,
-    a float view (n_modes, 2N) of complex (n_modes, N)) or, given the rotor Rn of a line of sight, h₊ and h× =
-    Re, −Im Σ_ℓ weights[ℓ] h'_ℓ2 of the modes h' in the frame Rn⁻¹ R (:func:`_line_of_sight`; the plan gives only
-    their m = ±2); ``scale`` multiplies the modes as they are stored.  The other arguments are
+    a float view (n_modes, 2N) of complex (n_modes, N)) or h₊ and h× = Re, −Im of: given the rotor Rn of a line of
+    sight, Σ_ℓ weights[ℓ] h'_ℓ2 of the modes h' in the frame Rn⁻¹ R (:func:`_line_of_sight`; the plan gives only
+    their m = ±2), else (frame "z") Σ_ℓm h_ℓm Y_ℓm of the inertial modes with Y_ℓm = weights[2i] + i weights[2i + 1],
+    i the mode's index, those with Y_ℓm = 0 skipped (:func:`_harmonics`); ``scale`` multiplies the modes as they are
+    stored.  The other arguments are
     :func:`pnrotor.pn.sampling._fill_history`'s (mode, R0, ell0, c1, c2) and
     :func:`pnrotor.waveform.amplitudes._sum`'s (spins 0 or 2, frame, and
     :func:`~pnrotor.waveform.amplitudes.kernel_terms`)."""
     B = _CHUNK
-    n_rows = 0 if mode == MODE_ALIGNED else B   # an aligned run's spins and ℓ̂ are constant: no rows
+    n_rows = 0 if mode == MODE_ALIGNED or spins == 0 else B   # an aligned run's spins and ℓ̂ are constant, and
+    # without spin terms neither is used: no rows (the states then have v, Φ and R alone)
     tq = np.empty(B)
     v_b, Phi_b, R_b, F_b = np.empty(B), np.empty(B), np.empty((B, 4)), np.empty((B, 4))
     chi1_b, chi2_b, ell_b = np.empty((n_rows, 3)), np.empty((n_rows, 3)), np.empty((n_rows, 3))
@@ -441,7 +487,13 @@ def _waves(mode, fwd_t, fwd_h, fwd_c, back_t, back_h, back_c, n_back, k_lo, dt, 
                 continue
             row0 = mode_index(ell, -ell)
             for r in range(2 * ell + 1):
-                _store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, modes, row0 + r, o, nb)
+                if hp.size == 0:
+                    _store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, modes, row0 + r, o, nb)
+                    continue
+                y_re, y_im = weights[2 * (row0 + r)], weights[2 * (row0 + r) + 1]
+                if y_re != 0.0 or y_im != 0.0:   # h_ℓm ₋₂Y_ℓm (frame "z": the inertial modes)
+                    _store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, x, 0, 0, nb)
+                    _add_times(x, 0, y_re, y_im, acc_re, acc_im, nb)
         if hp.size:
             for b in range(nb):
                 hp[o + b] = acc_re[b]
