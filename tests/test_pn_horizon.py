@@ -287,22 +287,27 @@ BINARIES = dict(m1=[50.0, 30.0, 12.0], m2=[5.0, 10.0, 12.0], chi1=[(0, 0, 0.9), 
 
 def test_evolve_many_and_population_tables_are_single_runs_bitwise(tmp_path):
     """evolve_many(…, horizon_absorption=True) gives bitwise each binary's evolve(…, sampling='final'), nonspinning,
-    aligned and precessing alike; a population table's horizon_absorption column selects it per row (one call per
-    value), each row's state that of evolve."""
+    aligned and precessing alike, and so does a DataFrame with the column; a population table's horizon_absorption
+    column selects it per row (one call per value), each row's state that of evolve, in chunks whose rows differ in
+    it (the chunks' files are joined with the column stored per row)."""
+    import pandas
+
     pop = evolve_many(**BINARIES, horizon_absorption=True)
-    assert pop.inputs["horizon_absorption"] is True
+    frame = evolve_many(pandas.DataFrame({**BINARIES, "horizon_absorption": True}))
+    assert pop.inputs["horizon_absorption"] is True and frame.inputs["horizon_absorption"] is True
     rows = list(zip(*BINARIES.values()))
     for i, (m1, m2, c1, c2, f) in enumerate(rows):
         one = evolve(m1, m2, c1, c2, f, sampling="final", horizon_absorption=True)
         for name in ("t", "v", "Phi", "chi1", "chi2", "R", "ell_hat"):
             assert np.array_equal(getattr(pop, name)[i], getattr(one, name)[-1]), name
+            assert np.array_equal(getattr(frame, name)[i], getattr(one, name)[-1]), name
     table = tmp_path / "rows.csv"
     table.write_text("m1,m2,chi1,chi2,f_ref,horizon_absorption\n" + "".join(
         f"{m1},{m2},\"{','.join(map(str, c1))}\",\"{','.join(map(str, c2))}\",{f},{h}\n"
         for (m1, m2, c1, c2, f), h in zip(rows, ("true", "0", "True"))))
     from pnrotor.batch import population
 
-    population.run(table, tmp_path / "pop.h5")
+    population.run(table, tmp_path / "pop.h5", chunk=2)
     back = hdf5.read(tmp_path / "pop.h5")
     assert back.inputs["horizon_absorption"].tolist() == [True, False, True]
     for i, ((m1, m2, c1, c2, f), h) in enumerate(zip(rows, (True, False, True))):

@@ -105,10 +105,10 @@ class PopulationTable(SpinAngles):
     @staticmethod
     def from_schema_1(values):
         """The fields of a table of HDF5 schema 1 (`pnrotor.hdf5.read`; docs/hdf5-schema.md), which held each row's
-        state where its integration stopped and had no ``reached``, ``stopped_at`` or tidal inputs: that state as
-        ``stopped_at``, ``reached`` from its termination as `pnrotor.evolve_many` sets it (f_max or f_min for a target
-        frequency, one of `pnrotor.pn.many.INSPIRAL_ENDS` for the end of the inspiral), NaN states where it is False,
-        and no tides (Λ = 0, the tidal order evolve's default)."""
+        state where its integration stopped and had no ``reached``, ``stopped_at``, tidal or horizon inputs: that
+        state as ``stopped_at``, ``reached`` from its termination as `pnrotor.evolve_many` sets it (f_max or f_min for
+        a target frequency, one of `pnrotor.pn.many.INSPIRAL_ENDS` for the end of the inspiral), NaN states where it
+        is False, no tides (Λ = 0, the tidal order evolve's default) and no horizon absorption."""
         from pnrotor.pn.many import INSPIRAL_ENDS
 
         if "reached" in values or any(name not in values for name in STATE + ("termination", "inputs")):
@@ -121,7 +121,7 @@ class PopulationTable(SpinAngles):
         n = termination.shape
         upgraded = dict(values, reached=reached, stopped_at={name: values[name] for name in STATE},
                         inputs={"lambda1": np.zeros(n), "lambda2": np.zeros(n), "tidal_order": np.full(n, np.nan),
-                                **inputs})
+                                "horizon_absorption": np.zeros(n, dtype=bool), **inputs})
         for name in STATE:
             upgraded[name] = np.where(reached.reshape(n + (1,) * (values[name].ndim - 1)), values[name], np.nan)
         return upgraded

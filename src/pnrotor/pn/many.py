@@ -591,8 +591,8 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
         optional ``f_max`` (the state there, forward) or ``f_min`` (backward), at most one per row (NaN: none; with
         neither, the end of the inspiral), instead of f_end; optional columns of the shared options
         (``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order``, ``precession``, ``atol``,
-        ``tidal_order``, ``horizon_absorption``) holding one value each (empty cells ignored), used as that keyword; ``sampling`` empty or ``final``; ``name``
-        ignored.  m2, chi1, chi2 and f_ref are then not given.
+        ``tidal_order``, ``horizon_absorption``) holding one value each (empty cells ignored), used as that
+        keyword; ``sampling`` empty or ``final``; ``name`` ignored.  m2, chi1, chi2 and f_ref are then not given.
     m1, m2, f_ref : array_like (N,) or scalar
         Masses (M☉) and reference GW frequencies (Hz), as for :func:`~pnrotor.pn.evolve.evolve` (astropy
         Quantities are converted).  N is the length of the inputs given per binary (these, the spins, f_end, …,
