@@ -259,6 +259,21 @@ def test_aligned_spins_stay_aligned_and_the_dephasing_has_its_sign():
     assert 0 < run.chi2[-1, 2] < 1e-5 and run.chi1[-1, 2] < 0.9
 
 
+def test_a_neutron_star_has_no_horizon():
+    """An NSBH (Λ₂ = 600) with the option: the star's mass is exactly its initial one and its spin's magnitude changes
+    only by the integration's error (~5e-12, as without the option), while the hole's change; the same binary with
+    Λ₂ = 0 (two holes) has the small body absorb too (|χ₂| −1e-6)."""
+    chi2 = (0.1, 0.0, 0.05)
+    kw = dict(f_max=300.0, sampling="final", horizon_absorption=True)
+    star = evolve(8.0, 1.4, (0.4, 0.0, 0.5), chi2, 30.0, lambda2=600.0, **kw)
+    hole = evolve(8.0, 1.4, (0.4, 0.0, 0.5), chi2, 30.0, **kw)
+    assert star.stats["m2_final_Msun"] == star.stats["m2_initial_Msun"] == 1.4
+    assert abs(np.linalg.norm(star.chi2[-1]) - np.linalg.norm(chi2)) < 1e-10   # the integration's: ~5e-12
+    assert hole.stats["m2_final_Msun"] != 1.4 and abs(np.linalg.norm(hole.chi2[-1]) - np.linalg.norm(chi2)) > 1e-7
+    for run in (star, hole):
+        assert run.stats["m1_final_Msun"] < 8.0 and np.linalg.norm(run.chi1[-1]) < math.hypot(0.4, 0.5)
+
+
 def test_bad_input_names_the_option(capsys, tmp_path):
     with pytest.raises(ValueError, match="horizon_absorption must be True or False, got 'yes'"):
         evolve(50.0, 5.0, (0, 0, 0.8), (0, 0, 0), 20.0, horizon_absorption="yes")

@@ -439,8 +439,9 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         too) and its energy in the masses.  Such a run integrates the precessing state, with the masses, even for
         nonspinning and aligned spins (``inputs['state']`` is 'precessing'; aligned spins stay aligned), and its
         ``stats`` hold the masses at both ends in M☉ (``m1_final_Msun``, ``m2_final_Msun``, ``m1_initial_Msun``,
-        ``m2_initial_Msun``); the rates and the PN coefficients take the masses at f_ref.  Not with
-        precession='instantaneous'.  LALSuite has no such option.
+        ``m2_initial_Msun``); the rates and the PN coefficients take the masses at f_ref.  A body with Λᵢ > 0 (a
+        neutron star) has no horizon: it absorbs nothing.  Not with precession='instantaneous'.  LALSuite has no
+        such option.
 
     Returns
     -------

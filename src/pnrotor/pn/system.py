@@ -36,8 +36,9 @@ Equations (units G = c = M = 1, t in units of M)
   with neutron-star tides, the 5PN and 6PN tidal terms of Ê and F̂ (Vines et al. 2011) added to F̂ and Ê′ (T1)
   or carried through the re-expansion to first order in Λᵢ (T4, T5), as LALSuite's SpinTaylor does
   (:func:`_add_tides`).  With horizon absorption (p[P_HORIZON] ≠ 0, precessing state only) the flux into both
-  horizons, averaged over the orbit (:func:`pnrotor.pn.flux.horizon_rates`), is computed at the current spins in
-  the right-hand side and the events and added at first order: N + F̂_H (T1, T4), D − F̂_H (T5).
+  horizons (a body with Λᵢ > 0, a neutron star, has none), averaged over the orbit
+  (:func:`pnrotor.pn.flux.horizon_rates`), is computed at the current spins in the right-hand side and the events
+  and added at first order: N + F̂_H (T1, T4), D − F̂_H (T5).
 
 * Spins: χ̇ᵢ = Ωᵢ × χᵢ (:mod:`~pnrotor.pn.precession`); with horizon absorption also + (Ṡᵢ/Xᵢ²) χ̂ᵢ − 2(ṁᵢ/Xᵢ) χᵢ,
   the angular momentum and mass each horizon absorbs (Ṡᵢ, taken from the orbit, enters Ω_ℓ too), and the masses
@@ -147,8 +148,10 @@ P_ISS1 = 37      # body 1: 2PN a_j, a_jn, a_in; 3PN b_j, b_jn, b_jλ, b_in, b_i�
 P_ISS2 = 45      # ... body 2
 P_OMEGA_L = 53   # 0: Ω_ℓ from −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| (LALSuite); 1: its spin-orbit part from ⟨ϖ n̂⟩ (Bohé+ 2013)
 P_HORIZON = 54   # horizon absorption: 0 none; 1 F̂_H added to N (T1, T4); −1 subtracted from D (T5)
+P_HX1 = 55       # with horizon absorption: X₁ if body 1 has a horizon (Λ₁ = 0), 0 for a neutron star (no absorption)
+P_HX2 = 56       # ... body 2
 # the series N, D, Ê′, each a header and its coefficients (series.fold_and_store)
-P_NUM = 55
+P_NUM = 57
 P_DEN = P_NUM + SERIES_SLOTS
 P_EP = P_DEN + SERIES_SLOTS
 P_SIZE = P_EP + SERIES_SLOTS
@@ -208,8 +211,8 @@ def _folded(p, off, v, lnv):
 @njit(cache=True, inline="always")
 def _horizon_flux(p, v, a1, s11, a2, s22):
     """(F̂_H, v ∂F̂_H/∂v) of both horizons (:func:`pnrotor.pn.flux.horizon_rates`) at v, with ℓ̂·χᵢ = aᵢ, χᵢ² = sᵢᵢ."""
-    f1, f1_v, _, _ = horizon_rates(p[P_X1], p[P_NU], v, a1, s11)
-    f2, f2_v, _, _ = horizon_rates(p[P_X2], p[P_NU], v, a2, s22)
+    f1, f1_v, _, _ = horizon_rates(p[P_HX1], p[P_NU], v, a1, s11)
+    f2, f2_v, _, _ = horizon_rates(p[P_HX2], p[P_NU], v, a2, s22)
     return f1 + f2, f1_v + f2_v
 
 
@@ -247,9 +250,9 @@ def rhs_precessing(t, y, p, dydt):
     den = _series(p, P_DEN, v, lnv, b)[0]
     horizon = p[P_HORIZON] != 0.0
     s1 = s2 = m1 = m2 = 0.0
-    if horizon:   # the flux into the horizons and the spins' and masses' rates (flux.horizon_rates)
-        f1, _, s1, m1 = horizon_rates(X1, p[P_NU], v, a1, b[4])
-        f2, _, s2, m2 = horizon_rates(X2, p[P_NU], v, a2, b[6])
+    if horizon:   # the flux into the horizons and the spins' and masses' rates (flux.horizon_rates; none for a star)
+        f1, _, s1, m1 = horizon_rates(p[P_HX1], p[P_NU], v, a1, b[4])
+        f2, _, s2, m2 = horizon_rates(p[P_HX2], p[P_NU], v, a2, b[6])
         num, _, den, _ = _add_horizon(p, f1 + f2, 0.0, num, 0.0, den, 0.0)
     vdot = _vdot(p, v, num, den)
     v2 = v * v
@@ -730,7 +733,10 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     p[P_ROTOR] = 1.0 if rotor == "orbital" else 0.0
     p[P_SHIFT] = 1.0 if phase_shift else 0.0
     p[P_OMEGA_L] = 1.0 if omega_l == "varpi" else 0.0
-    p[P_HORIZON] = (-1.0 if approximant == "T5" else 1.0) if horizon else 0.0
+    if horizon:   # a body with a tidal deformability is a neutron star: no horizon
+        p[P_HORIZON] = -1.0 if approximant == "T5" else 1.0
+        p[P_HX1] = np.where(np.asarray(lambda1) == 0.0, X1, 0.0)
+        p[P_HX2] = np.where(np.asarray(lambda2) == 0.0, X2, 0.0)
     put(P_W1, phase_shift_weights(X1, X2))
     inc = precession_terms(so_order, ss_order)
     keep_so = (inc["so_lo"], inc["so_nlo"], inc["so_nnlo"])
