@@ -198,6 +198,8 @@ ARRAYS = {
         "inputs/lambda2": Array(("N",), "1; dimensionless tidal deformability of body 2"),
         "inputs/tidal_order": Array(("N",), "PN order of the tidal terms (0, 5 or 6; NaN: pnrotor.evolve's default)",
                                     finite=False),
+        "inputs/horizon_absorption": Array(("N",), "whether the run followed the flux into the black holes' horizons",
+                                           "bool"),
     },
 }
 _POPULATION = tuple(name for name in ARRAYS["PopulationTable"] if name != "name" and not name.startswith("inputs/"))

@@ -53,7 +53,8 @@ __all__ = ["PopulationTable", "Plan", "plan", "run", "unsupported", "compute_chu
 CHUNK = 10_000
 """Rows per chunk: one task, one `evolve_many` call per group of options, one part file."""
 
-SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order")
+SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order",
+          "horizon_absorption")
 """The table's columns that `evolve_many` takes as shared by all its binaries: one call per combination."""
 
 FIELDS = STATE + ("termination", "reached", "message", "nsteps", "nfev")
@@ -76,7 +77,8 @@ class PopulationTable(SpinAngles):
     inputs : dict — per row (arrays of N): ``row`` (its number in the table, from 1), ``m1_Msun``,
         ``m2_Msun``, ``chi1``, ``chi2`` (at f_ref), ``f_ref_Hz``, ``f_min_Hz``, ``f_max_Hz`` (NaN where absent),
         ``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order`` (NaN: evolve's default),
-        ``precession``, ``atol``, ``lambda1``, ``lambda2``, ``tidal_order`` (NaN: evolve's default); and the options
+        ``precession``, ``atol``, ``lambda1``, ``lambda2``, ``tidal_order`` (NaN: evolve's default),
+        ``horizon_absorption`` (bool); and the options
         every row shares (``rtol``, ``rotor``, ...), as
         `Population.inputs` has them
     """
@@ -103,10 +105,10 @@ class PopulationTable(SpinAngles):
     @staticmethod
     def from_schema_1(values):
         """The fields of a table of HDF5 schema 1 (`pnrotor.hdf5.read`; docs/hdf5-schema.md), which held each row's
-        state where its integration stopped and had no ``reached``, ``stopped_at`` or tidal inputs: that state as
-        ``stopped_at``, ``reached`` from its termination as `pnrotor.evolve_many` sets it (f_max or f_min for a target
-        frequency, one of `pnrotor.pn.many.INSPIRAL_ENDS` for the end of the inspiral), NaN states where it is False,
-        and no tides (Λ = 0, the tidal order evolve's default)."""
+        state where its integration stopped and had no ``reached``, ``stopped_at``, tidal or horizon inputs: that
+        state as ``stopped_at``, ``reached`` from its termination as `pnrotor.evolve_many` sets it (f_max or f_min for
+        a target frequency, one of `pnrotor.pn.many.INSPIRAL_ENDS` for the end of the inspiral), NaN states where it
+        is False, no tides (Λ = 0, the tidal order evolve's default) and no horizon absorption."""
         from pnrotor.pn.many import INSPIRAL_ENDS
 
         if "reached" in values or any(name not in values for name in STATE + ("termination", "inputs")):
@@ -119,7 +121,7 @@ class PopulationTable(SpinAngles):
         n = termination.shape
         upgraded = dict(values, reached=reached, stopped_at={name: values[name] for name in STATE},
                         inputs={"lambda1": np.zeros(n), "lambda2": np.zeros(n), "tidal_order": np.full(n, np.nan),
-                                **inputs})
+                                "horizon_absorption": np.zeros(n, dtype=bool), **inputs})
         for name in STATE:
             upgraded[name] = np.where(reached.reshape(n + (1,) * (values[name].ndim - 1)), values[name], np.nan)
         return upgraded
@@ -245,6 +247,7 @@ def _table(rows, parts):
         "precession": _strings(row.params["precession"] for row in rows), "atol": _floats(rows, "atol"),
         "lambda1": _floats(rows, "lambda1"), "lambda2": _floats(rows, "lambda2"),
         "tidal_order": _floats(rows, "tidal_order", nan),
+        "horizon_absorption": np.array([row.params["horizon_absorption"] for row in rows], dtype=bool),
     }
     common = {key: value for key, value in parts[0][1].inputs.items() if key not in SHARED + PER_BINARY}
     return PopulationTable(name=_strings(row.name for row in rows), **columns, stopped_at=stopped_at,

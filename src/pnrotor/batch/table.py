@@ -77,6 +77,8 @@ def default_name(p):
             parts.append(f"{tag}{_number(p[key])}")
     if p["precession"] != DEFAULTS["precession"]:
         parts.append(str(p["precession"]))
+    if p["horizon_absorption"]:
+        parts.append("horizon")
     sampling = p["sampling"]
     if isinstance(sampling, tuple):
         parts.append(f"perorbit{sampling[1]}")
@@ -332,6 +334,8 @@ def _row_parameters(record, cli_defaults):
             params[key] = parse_sampling(value, "sampling")
         elif key in ("approximant", "precession"):
             params[key] = str(value)
+        elif key == "horizon_absorption":
+            params[key] = _bool(value, key)
         else:
             params[key] = _float(value, key)
     from pnrotor.hdf5 import _valid_name
@@ -344,6 +348,18 @@ def _row_parameters(record, cli_defaults):
     else:
         default_name(params)  # checks the approximant before the run
     return params, name
+
+
+def _bool(value, key):
+    """True or False from a TOML boolean or a CSV cell true/false (any case), 1/0."""
+    if isinstance(value, bool):
+        return value
+    text = str(value).strip().lower()
+    if text in ("true", "1"):
+        return True
+    if text in ("false", "0"):
+        return False
+    raise ValueError(f"{key} must be true or false (or 1, 0), got {value!r}")
 
 
 def _float(value, key):

@@ -94,6 +94,9 @@ def add_parser(subparsers):
                        help="dimensionless tidal deformability of body 2 (default 0)")
     model.add_argument("--tidal-order", type=float, metavar="ORDER",
                        help="PN order of the tidal terms: 0 (none), 5 or 6 (default 6)")
+    model.add_argument("--horizon-absorption", action="store_true", default=None,
+                       help="follow the energy and angular momentum the black holes' horizons absorb (tidal heating, "
+                       "Alvi 2001, averaged over the orbit): in the energy balance, the spins and the masses")
     output = parser.add_argument_group("output")
     output.add_argument("-o", "--output", metavar="FILE.h5",
                         help="output file (default: waveforms/NAME.h5, NAME from the parameters, or waveforms/STEM.h5 "
@@ -336,7 +339,7 @@ def summary(run, wall=None, samples=None):
         f"f_ref {i['f_ref_Hz']:g} Hz ({i['spin_content']})",
         f"  model          {i['approximant']}, PN order {i['pn_order']:g} (spin-orbit {i['spin_orbit_order']:g}, "
         f"spin-spin {i['spin_spin_order']:g}), precession {i['precession']}, atol {i['atol']:g}"
-        + _tides_text(i),
+        + _tides_text(i) + (", horizon absorption" if i.get("horizon_absorption") else ""),
         f"  duration       {(t1 - t0) * M:.6g} s = {t1 - t0:.6g} M  (t from {t0:.6g} to {t1:.6g} M)",
         f"  ΔΦ/2π          {_orbits_text(orbits, exact)}",
         f"  v              {v0:.6g} -> {v1:.6g}",
@@ -345,6 +348,9 @@ def summary(run, wall=None, samples=None):
         f"  backward       {s['termination_backward']}: {s['termination_backward_message']}",
         f"  work           {s['nfev']} evaluations, {s['nsteps']} steps ({s['naccepted']} accepted, "
         f"{s['nrejected']} rejected)",
+        *([f"  masses         m1 {s['m1_initial_Msun']:.9g} -> {s['m1_final_Msun']:.9g} Msun, m2 "
+           f"{s['m2_initial_Msun']:.9g} -> {s['m2_final_Msun']:.9g} Msun (the horizons' absorption)"]
+          if "m1_final_Msun" in s else []),
         f"  samples        {len(run) if samples is None else samples} ({_sampling_text(i)})",
         f"  wall time      {s['wall_time_s']:.3g} s evolving"
         + (f", {wall:.3g} s in all (imports and writing included)" if wall is not None else ""),

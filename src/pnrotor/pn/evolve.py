@@ -55,7 +55,6 @@ from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STAT
 from . import initial as _ini
 from . import system as _sys
 from .sampling import compile_output_kernel, sample
-from .flux import horizon_flux
 from .series import basis_values, kmax_from_orders
 from .settings import normalize_approximant, settings
 
@@ -193,21 +192,9 @@ def build_system(s):
         kappa2=s.kappa2, lambda1=s.lambda1, lambda2=s.lambda2, v_end=s.v_max, spin_tol=_sys.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
         phase_shift=s.precession_phase_shift,
         aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
-        horizon=_horizon(s, bvals))
+        horizon=s.horizon_absorption)
     _check_start(s, kmax, bvals, *at_v0, _sys.earlier_end(*events.addresses, y0, p))
     return System(rhs, events, p, y0, kmax, bvals)
-
-
-def _horizon(s, bvals):
-    """{k: c} of the flux into both horizons (:func:`pnrotor.pn.flux.horizon_flux`) with ``horizon_absorption``
-    (nonspinning or aligned spins, ℓ̂·χᵢ = bvals[1], bvals[2]), else None."""
-    if not s.horizon_absorption:
-        return None
-    out = {}
-    for X, a in ((s.X1, bvals[1]), (1.0 - s.X1, bvals[2])):
-        for k, c in horizon_flux(X, a).items():
-            out[k] = out.get(k, 0.0) + c
-    return out
 
 
 def kmax_of(s):
@@ -242,6 +229,8 @@ def _start(s):
     bvals = _invariants(x1, y1, z1, x2, y2, z2, lx, ly, lz)
     if s.use_aligned:
         return bvals, np.array([s.v0, 0.0])
+    if s.horizon_absorption:   # [v, χ₁, χ₂, R, Φ, m₁, m₂], the masses in units of M at f_ref
+        return bvals, np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0, s.X1, 1.0 - s.X1])
     return bvals, np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0])   # [v, χ₁, χ₂, R, Φ]
 
 
@@ -257,7 +246,9 @@ def build_rows(o, b, parts, rows):
     rhs, events = _functions(aligned, o.precession)
     bases = np.ascontiguousarray(_invariants(*b.chi1.T, *b.chi2.T, *b.ell_hat.T).T)
     zeros = np.zeros((b.v0.size, 1))
-    Y0 = np.concatenate([b.v0[:, None], zeros] if aligned else [b.v0[:, None], b.chi1, b.chi2, b.R0, zeros], axis=1)
+    masses = [b.X1[:, None], 1.0 - b.X1[:, None]] if o.horizon_absorption else []
+    Y0 = np.concatenate([b.v0[:, None], zeros] if aligned else [b.v0[:, None], b.chi1, b.chi2, b.R0, zeros, *masses],
+                        axis=1)
     P, checks = np.zeros((b.v0.size, _sys.P_SIZE)), np.empty((b.v0.size, 5))
     _sys.start_rows(*parts, rows, bases, aligned, b.v_max, _sys.spin_tolerance(o.atol, o.rtol), *events.addresses,
                     Y0, P, checks)
@@ -273,7 +264,7 @@ def population_parts(s, X1, kappa1, kappa2, lambda1=0.0, lambda2=0.0):
     and arrays X1, κ₁, κ₂, Λ₁, Λ₂ (row i is what :func:`build_rows` takes for binary i)."""
     return _sys.spin_independent_parts(X1, kappa1, kappa2, s.approximant, kmax_of(s),
                                        s.spin_orbit_order, s.spin_spin_order, s.rotor, s.precession_phase_shift,
-                                       _omega_l(s), lambda1, lambda2)
+                                       _omega_l(s), lambda1, lambda2, s.horizon_absorption)
 
 
 def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
@@ -441,11 +432,16 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         PN order of the tidal terms: 0 none, 5 the leading ones, 6 with their 1PN corrections (None: 6), kept
         whatever ``pn_order`` is, as LALSuite's tideO.
     horizon_absorption : bool
-        Add the energy flux into black-hole horizons (Alvi 2001 at leading order in the tidal coupling, exact in
-        the spins: relative 2.5PN with spins, 4PN without; :func:`pnrotor.pn.flux.horizon_flux`) to the energy
-        balance, at first order in it, whatever ``pn_order`` is.  For nonspinning binaries and spins along ℓ̂
-        (a ValueError for precessing ones); the spins' and masses' own change by the absorbed angular momentum
-        and energy is not followed (the aligned state holds the spins constant).  LALSuite has no such option.
+        Follow the flux into black-hole horizons, averaged over the orbit, for any spins (Alvi 2001 at leading order
+        in the tidal coupling, exact in the spins: relative 2.5PN with spins, 4PN without;
+        :func:`pnrotor.pn.flux.horizon_rates`): its energy in the energy balance at first order whatever
+        ``pn_order`` is, its angular momentum in the spins' magnitudes (taken from the orbit: in ℓ̂'s precession
+        too) and its energy in the masses.  Such a run integrates the precessing state, with the masses, even for
+        nonspinning and aligned spins (``inputs['state']`` is 'precessing'; aligned spins stay aligned), and its
+        ``stats`` hold the masses at both ends in M☉ (``m1_final_Msun``, ``m2_final_Msun``, ``m1_initial_Msun``,
+        ``m2_initial_Msun``); the rates and the PN coefficients take the masses at f_ref.  A body with Λᵢ > 0 (a
+        neutron star) has no horizon: it absorbs nothing.  Not with precession='instantaneous'.  LALSuite has no
+        such option.
 
     Returns
     -------
@@ -481,6 +477,11 @@ def integrate(s):
     t_int = time.perf_counter() - t_int
     stats = _stats(res_f, res_b, term_f, term_b)
     stats["wall_time_integrate_s"] = t_int
+    if s.horizon_absorption:   # the masses the horizons' absorption leaves at both ends of the run
+        M = s.m1 + s.m2
+        for key, res in (("final", res_f), ("initial", res_b)):
+            m = (s.X1, 1.0 - s.X1) if res is None else res.y[-1, _sys.Y_M1:_sys.Y_M2 + 1].tolist()
+            stats[f"m1_{key}_Msun"], stats[f"m2_{key}_Msun"] = m[0] * M, m[1] * M
     return res_f, res_b, term_f, stats
 
 

@@ -488,7 +488,8 @@ def _is_frame(x):
     return pandas is not None and isinstance(x, pandas.DataFrame)
 
 
-_FRAME_SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order")
+_FRAME_SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order",
+                 "horizon_absorption")
 """The columns of a batch table that a DataFrame may hold for the options evolve_many shares (one value each)."""
 
 
@@ -577,7 +578,7 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
                 n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, approximant="T4", pn_order=3.5,
                 spin_orbit_order=None, spin_spin_order=None, atol=1e-12, rtol=0.0, rotor="coprecessing",
                 precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000,
-                lambda1=0.0, lambda2=0.0, tidal_order=None):
+                lambda1=0.0, lambda2=0.0, tidal_order=None, horizon_absorption=False):
     r"""Evolve N binaries from f_ref → :class:`Population` of their states at the end of the inspiral, at
     f_end or at a list of frequencies (module docstring), NaN where a binary did not reach its target (its
     ``reached`` False, the state where it stopped in ``stopped_at``).
@@ -589,9 +590,9 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
         ``m1``, ``m2``, ``chi1``, ``chi2`` (cells of three numbers, or ``"x,y,z"`` text), ``f_ref`` per binary;
         optional ``f_max`` (the state there, forward) or ``f_min`` (backward), at most one per row (NaN: none; with
         neither, the end of the inspiral), instead of f_end; optional columns of the shared options
-        (``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order``, ``precession``, ``atol``) holding
-        one value each (empty cells ignored), used as that keyword; ``sampling`` empty or ``final``; ``name``
-        ignored.  m2, chi1, chi2 and f_ref are then not given.
+        (``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order``, ``precession``, ``atol``,
+        ``tidal_order``, ``horizon_absorption``) holding one value each (empty cells ignored), used as that
+        keyword; ``sampling`` empty or ``final``; ``name`` ignored.  m2, chi1, chi2 and f_ref are then not given.
     m1, m2, f_ref : array_like (N,) or scalar
         Masses (M☉) and reference GW frequencies (Hz), as for :func:`~pnrotor.pn.evolve.evolve` (astropy
         Quantities are converted).  N is the length of the inputs given per binary (these, the spins, f_end, …,
@@ -614,8 +615,10 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
     lambda1, lambda2 : array_like (N,) or scalar
         Dimensionless tidal deformabilities Λᵢ (0 for black holes).
     approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, rotor, precession_phase_shift, \
-integrate_rotor, precession, max_steps, tidal_order
-        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
+integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
+        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries (with ``horizon_absorption`` every binary
+        is on the precessing state, its spins at the state's frequency changed by what the horizons absorbed; the
+        masses it leaves are not kept).
 
     The number of threads is :func:`pnrotor.threads.thread_count`'s (numba's: ``numba.set_num_threads``,
     ``NUMBA_NUM_THREADS``; at most :func:`pnrotor.threads.limit`'s).  Invalid shared
@@ -625,7 +628,8 @@ integrate_rotor, precession, max_steps, tidal_order
     shared = dict(approximant=approximant, pn_order=pn_order, spin_orbit_order=spin_orbit_order,
                   spin_spin_order=spin_spin_order, atol=atol, rtol=rtol, sampling="final", rotor=rotor,
                   precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
-                  precession=precession, max_steps=max_steps, tidal_order=tidal_order)
+                  precession=precession, max_steps=max_steps, tidal_order=tidal_order,
+                  horizon_absorption=horizon_absorption)
     backward = None   # a binary's target behind f_ref (f_min): by default where it lies below f_ref
     if _is_frame(m1):
         m1, m2, chi1, chi2, f_ref, f_end, backward, lambda1, lambda2 = _from_frame(
