@@ -47,7 +47,6 @@ becomes a `ValueError` naming the file, never a traceback.
 import dataclasses
 import errno
 import importlib
-import numbers
 import os
 import re
 import signal
@@ -56,7 +55,6 @@ import secrets
 import shutil
 import threading
 import zlib
-from collections import Counter
 from contextlib import ExitStack, contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
@@ -66,28 +64,20 @@ import h5py
 import numpy as np
 
 from pnrotor import __version__, signals
+from pnrotor.results import ARRAYS, KINDS, NOT_WRITTEN, REQUIRED_KEYS, UNITS, Array, check, layout_problems  # noqa: F401
+from pnrotor.results.schema import ARRAY_KINDS, is_strings
 
 SCHEMA_VERSION = 2
 """Integer version of the layout below; `read` refuses files with a newer one.  Version 2 stores every string
 attribute as fixed-length UTF-8 (`_string`), version 1 as variable-length strings in HDF5's global heap; both are
 read."""
 
-KINDS = {
-    "FrameHistory": "pnrotor.history:FrameHistory",
-    "Evolution": "pnrotor.pn.evolve:Evolution",
-    "Modes": "pnrotor.waveform.modes:Modes",
-    "Polarizations": "pnrotor.waveform.polarizations:Polarizations",
-    "PopulationTable": "pnrotor.batch.population:PopulationTable",
-}
-"""The ``kind`` attribute → ``module:class`` of the dataclass it names, imported when a file is read."""
 
 BATCH = "batch"
 """``kind`` of the root of a batch file, whose top-level groups are runs."""
 
 COMPRESSIONS = (None, "gzip", "lzf")
 
-NOT_WRITTEN = frozenset({"dense"})
-"""Fields that are functions of the integrator rather than data; `read` leaves them at their default."""
 
 _METADATA = ("kind", "pnrotor_schema", "pnrotor_version", "created")
 _STRINGS_CRC = "pnrotor_strings_crc32"
@@ -95,139 +85,12 @@ _STRINGS_CRC = "pnrotor_strings_crc32"
 _NOT_FIELDS = _METADATA + (_STRINGS_CRC,)
 """The attributes of a run group that are not fields of its dataclass."""
 _SEQUENCES = {"list": list, "tuple": tuple}
-_ARRAY_KINDS = "biufc"  # numpy dtype kinds stored as datasets: bool, signed, unsigned, float, complex
 _CHUNK_BYTES = 1 << 20  # chunks of at most about 1 MiB along the first (time) axis
 _WRITEBACK_BYTES = 1 << 20  # a dataset this large starts the writeback of the file to disk in the background
 _GZIP_LEVEL = 1  # on 10⁶-sample PN-like data level 4 saved 1.5% of the size for 1.7× the write time
 _TEMPORARY_SUFFIX = ".pnrotor-tmp"
 _STREAM_SAMPLES = 1 << 17  # samples per block of a streamed run: a multiple of each of its chunks (of <= 1 MiB)
 
-
-
-class Array(NamedTuple):
-    """How an array field of a run is stored: its ``shape``, each entry an int, ``"N"`` (the number of samples,
-    the same in every array of the run) or a name in `_DIMENSIONS`; its ``units`` attribute; its ``dtype``
-    (either byte order; ``"str"``: a numpy object array of `str`, stored as fixed-length UTF-8).  Its values
-    must be finite unless ``finite`` is False (float and complex arrays; NaN then marks an absent value); with
-    ``rotors`` each row along the last axis is a rotor, its squared norm a normal float64 (not zero, nor so small
-    or large that the kernels dividing by it would fail; a row of NaN where NaN is allowed)."""
-
-    shape: tuple
-    units: str
-    dtype: str = "float64"
-    finite: bool = True
-    rotors: bool = False
-
-
-_M = "M (G M / c^3, total mass M)"
-_ROTOR = Array(("N", 4), (
-    "1; scalar-first unit quaternion (w, x, y, z), sign-continuous in time; "
-    "frame vectors are R x R^-1, R y R^-1, R z R^-1 (Boyle 2016, eq:rotor-rotation)"
-), rotors=True)
-_STATE = {
-    "t": Array(("N",), _M + "; t = 0 at f_ref"),
-    "t_seconds": Array(("N",), "s; t = 0 at f_ref"),
-    "v": Array(("N",), "c; PN parameter v = (M Omega_orb)^(1/3)"),
-    "Phi": Array(("N",), "rad; orbital phase, 0 at f_ref"),
-    "chi1": Array(("N", 3), "1; dimensionless spin S1 / m1^2, inertial-frame components"),
-    "chi2": Array(("N", 3), "1; dimensionless spin S2 / m2^2, inertial-frame components"),
-    "R": _ROTOR,
-    "ell_hat": Array(("N", 3), "1; unit normal to the orbital plane, inertial-frame components"),
-}
-"""The state of a binary in a `PopulationTable`, one per row: at its target, and where its integration stopped."""
-ARRAYS = {
-    "FrameHistory": {
-        "t": Array(("N",), "time unit of the angular velocity (omega in rad per unit)"),
-        "R": _ROTOR,
-    },
-    "Evolution": {
-        "t": Array(("N",), _M),
-        "t_seconds": Array(("N",), "s"),
-        "v": Array(("N",), "c; PN parameter v = (M Omega_orb)^(1/3)"),
-        "Phi": Array(("N",), "rad; orbital phase"),
-        "chi1": Array(("N", 3), "1; dimensionless spin S1 / m1^2, inertial-frame components"),
-        "chi2": Array(("N", 3), "1; dimensionless spin S2 / m2^2, inertial-frame components"),
-        "ell_hat": Array(("N", 3), "1; unit normal to the orbital plane, inertial-frame components"),
-        "R": _ROTOR,
-    },
-    "Modes": {
-        "t": Array(("N",), _M),
-        "t_seconds": Array(("N",), "s"),
-        "data": Array(("modes", "N"), "strain at distance_Mpc, or r h / M if distance_Mpc is absent; row k is mode "
-                      "(l, m) with k = l (l + 1) + m - 4, l = 2 ... ell_max (LALSuite's convention)", "complex128"),
-        "R": _ROTOR,
-        "Phi": Array(("N",), "rad; orbital phase"),
-    },
-    "Polarizations": {
-        "t_seconds": Array(("N",), "s; t = 0 at f_ref"),
-        "h_plus": Array(("N",), "strain at distance_Mpc; h+ - i hx = sum of h_lm -2Y_lm(inclination, pi/2 - phi_ref) "
-                        "(LALSuite's convention)"),
-        "h_cross": Array(("N",), "strain at distance_Mpc"),
-    },
-    "PopulationTable": {
-        "name": Array(("N",), "the row's name (the batch table's name column, or its default name)", "str"),
-        **{name: array._replace(units=array.units + "; at the row's target, NaN where reached is false", finite=False)
-           for name, array in _STATE.items()},
-        "termination": Array(("N",), "why the integration to this state stopped (f_max, f_min or the end of the "
-                             "inspiral, as pnrotor.evolve names it)", "str"),
-        "reached": Array(("N",), "whether the integration reached the row's target (f_max, f_min or the end of the "
-                         "inspiral)", "bool"),
-        **{"stopped_at/" + name: array._replace(finite=False) for name, array in _STATE.items()},
-        "message": Array(("N",), "the termination's explanation", "str"),
-        "nsteps": Array(("N",), "step attempts of the integration that gave the state", "int64"),
-        "nfev": Array(("N",), "right-hand-side evaluations of that integration", "int64"),
-        "inputs/row": Array(("N",), "number of the row in the batch table (1 = the first binary)", "int64"),
-        "inputs/m1_Msun": Array(("N",), "Msun"),
-        "inputs/m2_Msun": Array(("N",), "Msun"),
-        "inputs/chi1": Array(("N", 3), "1; dimensionless spin of body 1 at f_ref, inertial frame"),
-        "inputs/chi2": Array(("N", 3), "1; dimensionless spin of body 2 at f_ref, inertial frame"),
-        "inputs/f_ref_Hz": Array(("N",), "Hz; GW frequency where the spins are given, t = 0"),
-        "inputs/f_min_Hz": Array(("N",), "Hz; the state is the one at this GW frequency, integrated backward "
-                                 "(NaN: no f_min)", finite=False),
-        "inputs/f_max_Hz": Array(("N",), "Hz; the state is the one at this GW frequency (NaN: no f_max; with "
-                                 "neither, the end of the inspiral)", finite=False),
-        "inputs/approximant": Array(("N",), "T1, T4 or T5", "str"),
-        "inputs/pn_order": Array(("N",), "PN order of the nonspinning terms"),
-        "inputs/spin_orbit_order": Array(("N",), "PN order of the spin-orbit terms (-1: none; NaN: pnrotor.evolve's "
-                                         "default)", finite=False),
-        "inputs/spin_spin_order": Array(("N",), "PN order of the spin-spin terms (-1: none; NaN: pnrotor.evolve's "
-                                        "default)", finite=False),
-        "inputs/precession": Array(("N",), "spin precession model", "str"),
-        "inputs/atol": Array(("N",), "absolute tolerance of the integrator"),
-        "inputs/lambda1": Array(("N",), "1; dimensionless tidal deformability of body 1"),
-        "inputs/lambda2": Array(("N",), "1; dimensionless tidal deformability of body 2"),
-        "inputs/tidal_order": Array(("N",), "PN order of the tidal terms (0, 5 or 6; NaN: pnrotor.evolve's default)",
-                                    finite=False),
-    },
-}
-_POPULATION = tuple(name for name in ARRAYS["PopulationTable"] if name != "name" and not name.startswith("inputs/"))
-ARRAYS["Population"] = {name: ARRAYS["PopulationTable"][name]._replace(
-    shape=("N", "K", *ARRAYS["PopulationTable"][name].shape[1:]), finite=False) for name in _POPULATION}
-"""The array fields of each run kind (`Array`): what `write` and `read` check, and their ``units``.  A name
-``GROUP/NAME`` is the array NAME of the run's dict field GROUP (a dataset of that subgroup).  `pnrotor.Population`,
-not a kind of file (its file is a ``PopulationTable``), is checked by the same rules when it is built: the
-fields it shares with a ``PopulationTable``, with a second axis K over a list of target frequencies where it has
-one, NaN allowed (an invalid binary)."""
-
-_DIMENSIONS = {"modes": lambda values: (values["ell_max"] + 1) ** 2 - 4,
-               "K": lambda values: values["t"].shape[1] if values["t"].ndim == 2 else None}
-"""Named dimensions of `ARRAYS` other than N, from the run's other values (checked first); None: the run has no
-such axis."""
-
-UNITS = {kind: {name: array.units for name, array in arrays.items()} for kind, arrays in ARRAYS.items()}
-"""``units`` attribute written on a run's datasets of `ARRAYS`, by kind and field (``GROUP/NAME`` in a subgroup)."""
-
-_EVOLUTION_INPUTS = ("m1_Msun", "m2_Msun", "kappa1", "kappa2", "ell_hat", "n_hat", "state", "spin_content",
-                     "M_seconds", "v_ref", "f_min_Hz")
-REQUIRED_KEYS = {
-    "Evolution": {
-        "inputs": _EVOLUTION_INPUTS,
-        "stats": ("nfev", "wall_time_s", "t_initial", "t_final", "v_final", "termination_backward"),
-    },
-    "Modes": {"inputs": ("M_seconds", "ell_max")},
-}
-"""Keys a run's dict fields must hold, by kind: those pnrotor itself reads from a stored run
-(`Evolution.span`, `Evolution.f_gw`, `pnrotor.modes`, `Modes.polarizations`, a resumed batch)."""
 
 
 # --------------------------------------------------------------------------------------------------
@@ -573,142 +436,6 @@ def list_runs(path):
     """Names of the runs in a batch file, sorted; ``["/"]`` for a one-run file. Each works as `read`'s group."""
     with _open(path) as f:
         return _runs(f)
-
-
-def layout_problems(cls, values, scan=True):
-    """What is wrong with the run `values` (field name → value, as `read` gets them from a file or `write`
-    from a dataclass) of the run dataclass `cls`, as a list of sentences (empty: nothing). Checked:
-
-    * names: every field of `cls` present but those not written (`NOT_WRITTEN`, callable defaults), no other;
-    * types, by each field's annotation (`_TYPES`): ``np.ndarray`` a numeric array or an object array of
-      `str` (a dataset), ``dict`` a dict (a group), ``str``, ``int``, ``float`` such a scalar (an attribute; an
-      int counts as a float, a bool as neither), or ``None`` where that is the default; other annotations are
-      not checked;
-    * for the kinds in `ARRAYS`, each array's presence (``GROUP/NAME``: in the dict field GROUP), dtype (either
-      byte order) and shape, every ``"N"`` the same number of samples (that of most arrays, a tie going to the
-      first), and its values finite (where `Array.finite`; with ``scan=False`` only the rotors', each a pass
-      over the array, which a kernel that NaN does not harm need not pay for);
-    * for the kinds in `REQUIRED_KEYS`, the keys their dict fields must hold.
-    """
-    problems, kind = [], cls.__name__
-    fields = {field.name: field for field in dataclasses.fields(cls)}
-    for name in sorted(values.keys() - fields.keys()):
-        problems.append(f"{_what(values[name])} {name!r} is not a field of {kind}")
-    for name, field in fields.items():
-        if name in NOT_WRITTEN or callable(field.default):
-            continue
-        check, stored_as, expected = _TYPES.get(getattr(field.type, "__name__", field.type), (None, "field", ""))
-        if name not in values:
-            problems.append(f"{stored_as} {name!r} is missing")
-        elif check and not check(values[name]) and not (values[name] is None and field.default is None):
-            problems.append(f"{_what(values[name])} {name!r} is {_describe(values[name])}, expected {expected}")
-    if problems:
-        return problems  # shapes and keys need the right fields
-    arrays = {}
-    for name, spec in ARRAYS.get(kind, {}).items():
-        group, _, key = name.rpartition("/")
-        array = values[group].get(key) if group else values[name]
-        if _TYPES["ndarray"][0](array):
-            arrays[name] = spec, array
-        else:
-            problems.append(f"dataset {name!r} is missing" if array is None else
-                            f"{_what(array)} {name!r} is {_describe(array)}, expected an array")
-    sizes = {dim: size(values) for dim, size in _DIMENSIONS.items()
-             if any(dim in spec.shape for spec, _ in arrays.values())}
-    axes = {name: tuple(d for d in spec.shape if d not in sizes or sizes[d] is not None)
-            for name, (spec, array) in arrays.items()}
-    lengths = {name: array.shape[axes[name].index("N")] for name, (spec, array) in arrays.items()
-               if "N" in axes[name] and array.ndim == len(axes[name])}
-    n, count = Counter(lengths.values()).most_common(1)[0] if lengths else (None, 0)
-    like = [name for name, length in lengths.items() if length == n]
-    sizes["N"] = n
-    for name, (spec, array) in arrays.items():
-        shape = tuple(d if sizes.get(d, d) is None else sizes.get(d, d) for d in axes[name])
-        if spec.dtype == "str":
-            if not _is_strings(array):
-                problems.append(f"dataset {name!r} is {_describe(array)}, expected strings")
-            elif array.shape != shape:
-                problems.append(f"dataset {name!r} has shape {_shape(array.shape)}, expected {_shape(shape)}")
-        elif array.dtype.newbyteorder("=") != np.dtype(spec.dtype):
-            problems.append(f"dataset {name!r} is {array.dtype.name}, expected {np.dtype(spec.dtype).name}")
-        elif array.shape != shape:
-            others = f" and {count - 1} other array{'s' * (count > 2)}" if count > 1 else ""
-            samples = f" (N = {n} samples, as in {like[0]!r}{others})" if lengths.get(name, n) != n else ""
-            problems.append(f"dataset {name!r} has shape {_shape(array.shape)}, expected {_shape(shape)}{samples}")
-        elif spec.finite and (scan or spec.rotors) and array.dtype.kind in "fc" and not np.isfinite(array).all():
-            bad = np.argwhere(~np.isfinite(array))
-            at = tuple(bad[0].tolist()) if array.ndim > 1 else int(bad[0, 0])
-            problems.append(f"dataset {name!r} has {len(bad)} non-finite value{'s' * (len(bad) > 1)} "
-                            f"(NaN or inf), the first at index {at}")
-        elif spec.rotors and array.size:
-            with np.errstate(over="ignore", under="ignore"):
-                norm2 = np.einsum("...i,...i->...", array, array)
-            bad = np.argwhere(~((norm2 >= _TINY) & (norm2 <= _HUGE) | np.isnan(norm2)))
-            if len(bad):
-                at = tuple(bad[0].tolist()) if array.ndim > 2 else int(bad[0, 0])
-                problems.append(f"dataset {name!r} has {len(bad)} row{'s' * (len(bad) > 1)} of zero or extreme norm "
-                                f"(not a rotor: |R|^2 must be a normal float64), the first at index {at}")
-    for name, keys in REQUIRED_KEYS.get(kind, {}).items():
-        missing = [key for key in keys if key not in values[name]]
-        if missing:
-            problems.append(f"group {name!r} lacks {', '.join(map(repr, missing))}")
-    return problems
-
-
-_TINY, _HUGE = np.finfo(np.float64).tiny, np.finfo(np.float64).max
-"""The range of a rotor's squared norm: the kernels that read rotors divide by it."""
-
-
-def _is_strings(value):
-    """Whether `value` is a numpy object array of `str` (how a run holds a column of strings)."""
-    return (isinstance(value, np.ndarray) and value.dtype.kind == "O"
-            and all(isinstance(x, str) for x in value.flat))
-
-
-_TYPES = {
-    "ndarray": (lambda v: isinstance(v, np.ndarray) and (v.dtype.kind in _ARRAY_KINDS or _is_strings(v)), "dataset",
-                "a numeric array or an array of strings"),
-    "dict": (lambda v: isinstance(v, dict), "group", "a group"),
-    "str": (lambda v: isinstance(v, str), "attribute", "a string"),
-    "int": (lambda v: isinstance(v, numbers.Integral) and not isinstance(v, bool), "attribute", "an integer"),
-    "float": (lambda v: isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)), "attribute", "a number"),
-}
-"""Annotation of a run field → (check of a value, what stores it, what it must be) for `layout_problems`."""
-
-
-def _what(value):
-    """What a value read from a file was stored as."""
-    return "group" if isinstance(value, dict) else "dataset" if isinstance(value, (np.ndarray, list, tuple)) \
-        else "attribute"
-
-
-def _describe(value):
-    if isinstance(value, np.ndarray):
-        return f"{'an' if value.dtype.name[0] in 'aeiou' else 'a'} {value.dtype.name} array"
-    if isinstance(value, dict):
-        return "a group"
-    if value is None:
-        return "empty"
-    text = repr(value)
-    return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
-
-
-def _shape(shape):
-    return f"({', '.join(map(str, shape))}{',' * (len(shape) == 1)})"
-
-
-def check(run, doing="cannot write", scan=True):
-    """Raise ``ValueError(f"{doing} this KIND: PROBLEMS")`` unless the result dataclass `run` (a run kind of
-    `KINDS`, or a `pnrotor.Population`) passes `layout_problems`: the one check of a result's invariants (its
-    fields' types, its arrays' shapes, dtypes and finite values, nonzero rotors, the keys of its dicts), which
-    `write` makes before writing (so every file written reads back), `pnrotor.modes` and `Modes`' methods before
-    their compiled kernels read the arrays, and `FrameHistory` and `Population` when they are built.  ``scan``
-    as for `layout_problems`."""
-    values = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
-    values = {name: value for name, value in values.items() if name not in NOT_WRITTEN and not callable(value)}
-    problems = layout_problems(type(run), values, scan)
-    if problems:
-        raise ValueError(f"{doing} this {type(run).__name__}: {'; '.join(problems)}")
 
 
 def _check_run(run):
@@ -1075,14 +802,14 @@ def _put(g, name, value, storage, where):
         for key, item in value.items():
             _check_name(key, f"key of {where}")
             _put(sub, key, item, storage, f"{where}[{key!r}]")
-    elif _is_strings(value) or isinstance(value, _Unwritten):
-        _dataset(g, name, _utf8(value, where) if _is_strings(value) else value, *storage)
+    elif is_strings(value) or isinstance(value, _Unwritten):
+        _dataset(g, name, _utf8(value, where) if is_strings(value) else value, *storage)
     elif isinstance(value, np.ndarray) or type(value) in _SEQUENCES.values():
         try:
             array = np.asarray(value)
         except ValueError as error:
             raise ValueError(f"{where}: {error}") from None
-        if array.dtype.kind not in _ARRAY_KINDS or (not isinstance(value, np.ndarray) and array.ndim != 1):
+        if array.dtype.kind not in ARRAY_KINDS or (not isinstance(value, np.ndarray) and array.ndim != 1):
             raise TypeError(f"{where}: only numeric arrays and flat lists/tuples of numbers can be written")
         dataset = _dataset(g, name, array, *storage)
         if not isinstance(value, np.ndarray):

@@ -232,6 +232,7 @@ def _run_one(args):
     uniform = isinstance(params["sampling"], float)
     path, default_folder = _output_path(args, default_name(params))
     if args.modes or args.polarizations:
+        from pnrotor.results.waves import angle
         from pnrotor.waveform import modes
 
         ell_max, order2, distance = modes.check_arguments(*_modes_options(args))
@@ -240,8 +241,8 @@ def _run_one(args):
             raise UsageError("--polarizations needs a time step --sampling DT (e.g. 1/4096): h+, hx on a uniform grid")
         if args.inclination is None or distance is None:
             raise UsageError("--polarizations needs --inclination (radians) and --distance (Mpc)")
-        line_of_sight = dict(inclination=modes._angle(args.inclination, "--inclination"),
-                             phi_ref=modes._angle(args.phi_ref or 0.0, "--phi-ref"))
+        line_of_sight = dict(inclination=angle(args.inclination, "--inclination"),
+                             phi_ref=angle(args.phi_ref or 0.0, "--phi-ref"))
 
     from pnrotor.pn.evolve import check_inputs
 
