@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from pnrotor.pn.evolve import Evolution
+from pnrotor.results.schema import check
 from pnrotor.results.waves import FRAMES, CoarseSamplingWarning, Modes, check_memory, megaparsecs, warn_if_coarse
 from pnrotor.values import integer, real
 from pnrotor.waveform.amplitudes import modes_in_frame
@@ -121,9 +122,7 @@ def modes(evolution, ell_max=ELL_MAX, amplitude_order=3.5, distance=None, tidal_
                         f"{type(evolution).__name__}")
     ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
     memory = check_memory_flag(memory)
-    from pnrotor import hdf5
-
-    hdf5.check(evolution, "cannot compute the modes of")   # a malformed run would be read out of bounds
+    check(evolution, "cannot compute the modes of")   # a malformed run would be read out of bounds
     warn_if_coarse(evolution.Phi, evolution.inputs, "modes")
     check_memory(n_modes(ell_max), len(evolution), "modes()", streamed=True)
     inputs = evolution.inputs
