@@ -1,8 +1,8 @@
 """pnrotor's HDF5 files: run results (`FrameHistory`, `Evolution`, `Modes`, `Polarizations`, `PopulationTable`) to and
 from disk, atomic and versioned.
 
-This module owns the file format (documented for readers without pnrotor in docs/hdf5-schema.md) and
-every write and read of it:
+This module and its reading half (:mod:`pnrotor.io.hdf5_read`) own the file format (documented for readers without
+pnrotor in docs/hdf5-schema.md) and every write and read of it:
 
 * `write(path, run)` stores a run dataclass: each field that is an array becomes a dataset (float64 stays
   float64; chunked with a Fletcher-32 checksum per chunk and optional gzip/lzf compression, or with
@@ -45,9 +45,7 @@ becomes a `ValueError` naming the file, never a traceback.
 """
 
 import dataclasses
-import importlib
 import os
-import zlib
 from contextlib import ExitStack, contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
@@ -58,32 +56,22 @@ import numpy as np
 
 from pnrotor import __version__
 from pnrotor.io import atomic
-from pnrotor.results import ARRAYS, KINDS, NOT_WRITTEN, REQUIRED_KEYS, UNITS, Array, check, layout_problems  # noqa: F401
+from pnrotor.io.hdf5_read import (BATCH, NOT_FIELDS, SCHEMA_VERSION, SEQUENCES, STRINGS_CRC, attributes_of,
+                                  attr_of, check_metadata, check_schema, defaulted, get_fields, list_runs, metadata,
+                                  open_file, opened, read, run_group, run_names, strings_crc, valid_name)
+from pnrotor.results import ARRAYS, KINDS, NOT_WRITTEN, REQUIRED_KEYS, UNITS, Array, check, layout_problems
 from pnrotor.results.schema import ARRAY_KINDS, is_strings
 
-SCHEMA_VERSION = 2
-"""Integer version of the layout below; `read` refuses files with a newer one.  Version 2 stores every string
-attribute as fixed-length UTF-8 (`_string`), version 1 as variable-length strings in HDF5's global heap; both are
-read."""
-
-
-BATCH = "batch"
-"""``kind`` of the root of a batch file, whose top-level groups are runs."""
+__all__ = ["write", "read", "batch", "Batch", "image", "concatenate", "metadata", "list_runs", "check",
+           "layout_problems", "valid_name", "KINDS", "ARRAYS", "UNITS", "REQUIRED_KEYS", "NOT_WRITTEN", "Array",
+           "SCHEMA_VERSION", "BATCH", "COMPRESSIONS"]
 
 COMPRESSIONS = (None, "gzip", "lzf")
 
-
-_METADATA = ("kind", "pnrotor_schema", "pnrotor_version", "created")
-_STRINGS_CRC = "pnrotor_strings_crc32"
-"""Attribute of a run group: `_strings_crc` of the run, written after everything else; files before it lack it."""
-_NOT_FIELDS = _METADATA + (_STRINGS_CRC,)
-"""The attributes of a run group that are not fields of its dataclass."""
-_SEQUENCES = {"list": list, "tuple": tuple}
 _CHUNK_BYTES = 1 << 20  # chunks of at most about 1 MiB along the first (time) axis
 _WRITEBACK_BYTES = 1 << 20  # a dataset this large starts the writeback of the file to disk in the background
 _GZIP_LEVEL = 1  # on 10⁶-sample PN-like data level 4 saved 1.5% of the size for 1.7× the write time
 _STREAM_SAMPLES = 1 << 17  # samples per block of a streamed run: a multiple of each of its chunks (of <= 1 MiB)
-
 
 
 # --------------------------------------------------------------------------------------------------
@@ -186,10 +174,10 @@ def batch(path, *, overwrite=False, compression=None, checksum=True, append=Fals
     _check_checksum(checksum)
     existing = None
     if append and path.is_file():
-        with _open(path) as f:
-            if _attr(f, "kind") != BATCH:
+        with opened(path) as f:
+            if attr_of(f, "kind") != BATCH:
                 raise ValueError(f"{path} holds a single run, not a batch; add runs to another file")
-            existing = set(_runs(f))
+            existing = set(run_names(f))
     else:
         atomic.check_target(path, overwrite)
     try:
@@ -245,9 +233,9 @@ class Batch:
         name = group if name is None else name
         if verify:
             read(source, group)
-        with _open_file(source) as f:
-            _check_schema(f, source)
-            run = _run_group(f, source, group)
+        with open_file(source) as f:
+            check_schema(f, source)
+            run = run_group(f, source, group)
             stored = []
             run.visititems(lambda _, item: stored.append(item.id.get_storage_size())
                            if isinstance(item, h5py.Dataset) else None)
@@ -307,7 +295,7 @@ def concatenate(path, sources, *, overwrite=False, compression=None, checksum=Tr
         raise ValueError(f"runs of kind {kind} have no arrays of samples to concatenate")
     lengths, widths = [], {}
     for source in sources:   # the length of each and the widest string of each column, from the files' metadata
-        with _open(source) as f:
+        with opened(source) as f:
             lengths.append(f[next(iter(stacked))].shape[0])
             for name, spec in stacked.items():
                 if spec.dtype == "str":
@@ -326,10 +314,10 @@ def concatenate(path, sources, *, overwrite=False, compression=None, checksum=Tr
         _put_run(out, template, compression, checksum)
         start = 0
         for source, length in zip(sources, lengths):
-            with _open(source) as f:
-                attributes = _attributes(f)
-                _check_metadata(attributes, source)
-                found = _get(f, attributes, skip=_NOT_FIELDS, leave=stacked)
+            with opened(source) as f:
+                attributes = attributes_of(f)
+                check_metadata(attributes, source)
+                found = get_fields(f, attributes, skip=NOT_FIELDS, leave=stacked)
                 for name in stacked:
                     _set(found, name, None)
                 if attributes["kind"] != kind or not _same(found, others):
@@ -385,73 +373,12 @@ def _same(a, b):
     return a == b or a != a and b != b
 
 
-def read(path, group=None):
-    """The run stored in `path` (in its batch group `group`), as the dataclass it was written from.
-
-    Before the dataclass is built the run's layout is checked: its metadata attributes (`metadata`), its
-    ``kind`` (a registered dataclass, `KINDS`) and then `layout_problems`: every stored field of that
-    dataclass present, no other, each of the type its annotation names (a dataset for an array, a group for
-    a dict, an attribute of that type otherwise); the arrays of `ARRAYS` of the dtype and shape given there,
-    all of the same number of samples N, with finite values; the keys of `REQUIRED_KEYS` in its inputs and
-    statistics; the CRC-32 of its string attributes (`_strings_crc`, in files that have it). Any problem
-    raises one `ValueError` naming the file (and run) and every problem found, e.g.
-    ``run.h5: dataset 'R' has shape (10, 3), expected (10, 4)``."""
-    with _open(path) as f:
-        g = _run_group(f, path, group)
-        where = path if group is None else f"{path} run {group!r}"
-        attributes = _attributes(g)   # each read once: HDF5 attribute reads are most of the time of a small file
-        _check_metadata(attributes, where)
-        cls = _class_of(attributes["kind"], where)
-        values = _get(g, attributes, skip=_NOT_FIELDS)
-        metadata = {name: _value(attributes[name]) for name in _METADATA}
-        crc = attributes.get(_STRINGS_CRC)
-        damaged = crc is not None and crc != _strings_crc({**metadata, **values})
-        if metadata["pnrotor_schema"] == 1 and hasattr(cls, "from_schema_1"):   # fields added since, derived
-            values = cls.from_schema_1(values)
-        problems = layout_problems(cls, values)
-        if not problems and damaged:
-            problems.append("its string attributes are damaged (their CRC-32 is not the one written with them)")
-        if problems:
-            raise ValueError(f"{where}: {'; '.join(problems)}")
-        return cls(**values)
-
-
-def metadata(path, group=None):
-    """The metadata attributes of a run: ``kind``, ``pnrotor_schema``, ``pnrotor_version``, ``created``
-    (checked: all four present, the schema version one this pnrotor reads, the others strings)."""
-    with _open(path) as f:
-        attributes = _attributes(_run_group(f, path, group))
-        _check_metadata(attributes, path if group is None else f"{path} run {group!r}")
-        return {name: _value(attributes[name]) for name in _METADATA}
-
-
-def list_runs(path):
-    """Names of the runs in a batch file, sorted; ``["/"]`` for a one-run file. Each works as `read`'s group."""
-    with _open(path) as f:
-        return _runs(f)
-
-
 def _check_run(run):
     """Raise unless the run dataclass `run` is of a kind `write` writes (`TypeError`) and one `read` would accept
     back (`check`'s `ValueError`)."""
     kind = _kind_of(run)
     check(run)
     return kind
-
-
-def _check_metadata(attributes, where):
-    """Raise `ValueError` unless the attributes of a run group (`_attributes`) hold the four metadata attributes,
-    ``kind``, ``pnrotor_version`` and ``created`` strings (the schema version is checked on opening)."""
-    missing = [name for name in _METADATA if name not in attributes]
-    wrong = [name for name in ("kind", "pnrotor_version", "created") if name in attributes
-             and not isinstance(attributes[name], str)]
-    if _STRINGS_CRC in attributes and not isinstance(attributes[_STRINGS_CRC], np.integer):
-        wrong.append(_STRINGS_CRC)
-    if missing or wrong:
-        raise ValueError(f"{where}: " + "; ".join([f"attribute {name!r} is missing" for name in missing]
-                                                 + [f"attribute {name!r} is not a "
-                                                    + ("number" if name == _STRINGS_CRC else "string")
-                                                    for name in wrong]))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -473,11 +400,6 @@ def _check_name(name, what):
         raise ValueError(f"{what} {name!r} is not a valid HDF5 name (non-empty, no '/', not '.')")
 
 
-def valid_name(name):
-    """Whether `name` names a member of a group (rather than a path): non-empty, no '/', not '.'."""
-    return isinstance(name, str) and name not in ("", ".") and "/" not in name and "\x00" not in name
-
-
 def _check_compression(compression):
     if compression not in COMPRESSIONS:
         raise ValueError(f"compression must be one of {COMPRESSIONS}, not {compression!r}")
@@ -486,14 +408,6 @@ def _check_compression(compression):
 def _check_checksum(checksum):
     if not isinstance(checksum, bool):
         raise TypeError(f"checksum must be True or False, not {checksum!r}")
-
-
-
-
-
-
-
-
 
 
 def _run_bytes(run):
@@ -536,26 +450,18 @@ def _replacing(path, overwrite, copy=False, durable=True):
                 _WRITEBACKS.pop(f.filename, None)
 
 
-
-
-
-
-
-
 _WRITEBACKS = {}
 """File name of an open temporary file written durably → its `atomic.Writeback`."""
-
-
 
 
 def _put_run(g, run, compression, checksum, written=()):
     """Store the run dataclass `run` in group `g`: its metadata attributes, its fields (but those `written`
     already), then the CRC of its strings."""
     kind = _kind_of(run)
-    metadata = _put_metadata(g, kind)
+    stamp = _put_metadata(g, kind)
     _put_fields(g, run, UNITS.get(kind, {}), (compression, checksum), written)
     fields = {field.name: getattr(run, field.name) for field in dataclasses.fields(run)}
-    g.attrs[_STRINGS_CRC] = np.uint32(_strings_crc({**metadata, **fields}))
+    g.attrs[STRINGS_CRC] = np.uint32(strings_crc({**stamp, **fields}))
 
 
 def _first_block(streamed):
@@ -613,34 +519,13 @@ def _streamed_chunks(shape, axis, itemsize, compression, checksum):
     return {"chunks": (1,) * axis + (max(length, 1),) + tuple(shape[axis + 1:]), **_filters(compression, checksum)}
 
 
-def _strings_crc(values):
-    """CRC-32 of the strings of a run, `values` (name → value, a dict for a group: its metadata and fields, as
-    written or as `_get` reads them back), each as ``PATH=VALUE`` with PATH its names from the run group
-    (``/inputs/spin_content``), in sorted order, joined by NUL.  HDF5 keeps a variable-length string in its
-    global heap, which has no checksum (the object headers of the 1.10 format and the Fletcher-32 of the
-    data cover the rest): without this, 4 of 500 bit flips in a small file read back as a wrong
-    ``termination`` or input (benchmarks/faults.py).  From the values, not the file: reading the attributes
-    again took 3.9 ms per write of a typical run (measured)."""
-    items = []
-
-    def walk(group, prefix):
-        for name, value in group.items():
-            if isinstance(value, dict):
-                walk(value, f"{prefix}/{name}")
-            elif isinstance(value, str):
-                items.append(f"{prefix}/{name}={value}")
-
-    walk(values, "")
-    return zlib.crc32("\0".join(sorted(items)).encode("utf-8", "surrogatepass"))
-
-
 def _put_metadata(g, kind):
     """Write the metadata attributes of a run group; return them."""
-    metadata = {"kind": kind, "pnrotor_schema": SCHEMA_VERSION, "pnrotor_version": __version__,
-                "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
-    for name, value in metadata.items():
+    stamp = {"kind": kind, "pnrotor_schema": SCHEMA_VERSION, "pnrotor_version": __version__,
+             "created": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    for name, value in stamp.items():
         g.attrs[name] = _string(value) if isinstance(value, str) else value
-    return metadata
+    return stamp
 
 
 def _put_fields(g, run, units, storage, written=()):
@@ -650,10 +535,10 @@ def _put_fields(g, run, units, storage, written=()):
             continue
         value = getattr(run, field.name)
         if field.name in NOT_WRITTEN or callable(value):
-            if field.name not in _defaulted(cls):
+            if field.name not in defaulted(cls):
                 raise TypeError(f"{cls.__name__}.{field.name} cannot be written and has no default to read back")
             continue
-        if field.name in _NOT_FIELDS:
+        if field.name in NOT_FIELDS:
             raise ValueError(f"{cls.__name__}.{field.name}: the name is reserved for pnrotor's metadata")
         _put(g, field.name, value, storage, f"{cls.__name__}.{field.name}")
     for name, text in units.items():
@@ -673,7 +558,7 @@ def _put(g, name, value, storage, where):
             _put(sub, key, item, storage, f"{where}[{key!r}]")
     elif is_strings(value) or isinstance(value, _Unwritten):
         _dataset(g, name, _utf8(value, where) if is_strings(value) else value, *storage)
-    elif isinstance(value, np.ndarray) or type(value) in _SEQUENCES.values():
+    elif isinstance(value, np.ndarray) or type(value) in SEQUENCES.values():
         try:
             array = np.asarray(value)
         except ValueError as error:
@@ -748,153 +633,8 @@ def _filters(compression, checksum):
     return options
 
 
-
-
-
-
-
-
-
-
-
-
 # --------------------------------------------------------------------------------------------------
 # reading
 # --------------------------------------------------------------------------------------------------
 
 
-def _open_file(path):
-    """The HDF5 file `path` open for reading, or the error that says what it is instead."""
-    path = Path(path)
-    if path.is_dir():
-        raise IsADirectoryError(f"{path} is a folder, not a pnrotor HDF5 file")
-    if not path.exists():
-        raise FileNotFoundError(f"{path}: no such file")
-    if not h5py.is_hdf5(path):
-        empty = " (it is empty)" if path.stat().st_size == 0 else ""
-        raise ValueError(f"{path} is not an HDF5 file{empty}")
-    try:
-        return h5py.File(path, "r")
-    except OSError as error:
-        raise ValueError(f"{path} is truncated or corrupt: HDF5 cannot open it ({error})") from None
-
-
-@contextmanager
-def _open(path):
-    """Open a pnrotor file for reading, or raise the error that says what it is instead; what HDF5 raises while
-    it is read becomes a ValueError naming the file."""
-    with _open_file(path) as f:
-        try:
-            _check_schema(f, path)
-            yield f
-        except OSError as error:
-            if type(error) is not OSError:  # FileExistsError and kin come from the caller, not from HDF5
-                raise
-            raise ValueError(f"{path} is corrupt: HDF5 cannot read it ({error})") from None
-        except (RuntimeError, TypeError, KeyError, IndexError, AttributeError, UnicodeDecodeError) as error:
-            # what damaged metadata makes h5py or the rebuilding of the dataclass raise: one clear error
-            raise ValueError(f"{path} is corrupt: {type(error).__name__} while reading it ({error})") from None
-
-
-def _check_schema(g, path):
-    if not isinstance(_attr(g, "kind", ""), str):   # compared with strings before the run is read
-        raise ValueError(f"{path}: attribute 'kind' is not a string")
-    schema = _attr(g, "pnrotor_schema")
-    if schema is None:
-        raise ValueError(f"{path} is an HDF5 file but not a pnrotor file (no 'pnrotor_schema' attribute)")
-    if not isinstance(schema, np.integer) or not 1 <= schema <= SCHEMA_VERSION:
-        writer = _value(_attr(g, "pnrotor_version", "an unknown version"))
-        newer = isinstance(schema, np.integer) and schema > SCHEMA_VERSION
-        raise ValueError(
-            f"{path} has pnrotor schema version {_value(schema)!r} (written by pnrotor {writer}); "
-            f"pnrotor {__version__} reads schema versions 1 to {SCHEMA_VERSION}"
-            + ("; upgrade pnrotor to read it" if newer else "")
-        )
-
-
-def _runs(f):
-    if _attr(f, "kind") != BATCH:
-        return ["/"]
-    return sorted(name for name, g in f.items() if isinstance(g, h5py.Group) and "kind" in g.attrs)
-
-
-def _run_group(f, path, group):
-    """The group of the run `group` (None: of a one-run file) of the open file `f`: a `h5py.Group`, the root for
-    a one-run file (whose attributes are read without opening the root again for each, as the file's are)."""
-    if group is None:
-        if _attr(f, "kind") == BATCH:
-            raise ValueError(f"{path} is a batch file; choose a run with group=NAME (--group NAME) from {_runs(f)}")
-        return f["/"]
-    if _attr(f, "kind") != BATCH:
-        g = f["/"] if group == "/" else None
-    else:  # the one group, not `_runs`, which opens every group
-        g = f.get(group) if valid_name(group) else None
-        g = g if isinstance(g, h5py.Group) and "kind" in g.attrs else None
-    if g is None:
-        raise ValueError(f"{path} has no run {group!r}; its runs are {_runs(f)}")
-    _check_schema(g, f"{path} run {group!r}")
-    return g
-
-
-def _class_of(kind, path):
-    if kind not in KINDS:
-        raise ValueError(f"{path}: unknown run kind {kind!r}; this pnrotor reads {sorted(KINDS)}")
-    module, _, name = KINDS[kind].partition(":")
-    try:
-        return getattr(importlib.import_module(module), name)
-    except (ImportError, AttributeError) as error:
-        raise ValueError(f"{path}: runs of kind {kind!r} need {KINDS[kind]}, which is not importable ({error})") from None
-
-
-def _defaulted(cls):
-    return {
-        f.name
-        for f in dataclasses.fields(cls)
-        if f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING
-    }
-
-
-def _attr(obj, name, default=None):
-    """Attribute `name` of the group or dataset `obj` as h5py reads it, but a fixed-length string (UTF-8, how
-    `write` stores strings since schema 2, `_string`; or ASCII, as h5py writes ``bytes``) as `str`, as h5py gives
-    a variable-length one (schema 1); `default` if there is none."""
-    attributes = obj.attrs
-    return _decoded(attributes, name) if name in attributes else default
-
-
-def _attributes(obj):
-    """All attributes of `obj` as `_attr` gives them, name → value, each read once."""
-    attributes = obj.attrs
-    return {name: _decoded(attributes, name) for name in attributes}
-
-
-def _decoded(attributes, name):
-    value = attributes[name]
-    return value.decode("utf-8", "surrogatepass") if isinstance(value, np.bytes_) else value
-
-
-def _value(attribute):
-    """An attribute as the Python value written: None for empty, int/float/bool for numpy scalars."""
-    if isinstance(attribute, h5py.Empty):
-        return None
-    return attribute.item() if isinstance(attribute, np.generic) else attribute
-
-
-def _get(g, attributes=None, skip=(), leave=(), prefix=""):
-    """The attributes (group `g`'s `_attributes`, or `attributes` if given; but those in `skip`), datasets (but those
-    whose path from the run is in `leave`) and subgroups of group `g` (whose path from the run is `prefix`) as the
-    values written: name → value."""
-    attributes = _attributes(g) if attributes is None else attributes
-    values = {name: _value(value) for name, value in attributes.items() if name not in skip}
-    for name, item in g.items():
-        if isinstance(item, h5py.Group):
-            values[name] = _get(item, leave=leave, prefix=f"{prefix}{name}/")
-        elif prefix + name in leave:
-            continue
-        elif h5py.check_string_dtype(item.dtype) is not None:   # an array of strings (`_utf8`)
-            values[name] = item.asstr()[...]
-        else:
-            array = item[...]
-            sequence = _attr(item, "sequence")
-            values[name] = array if sequence is None else _SEQUENCES[sequence](array.tolist())
-    return values
