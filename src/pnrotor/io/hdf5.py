@@ -56,13 +56,14 @@ import numpy as np
 
 from pnrotor import __version__
 from pnrotor.io import atomic
+from pnrotor.io import journal as journal_file
 from pnrotor.io.hdf5_read import (BATCH, NOT_FIELDS, SCHEMA_VERSION, SEQUENCES, STRINGS_CRC, attributes_of,
                                   attr_of, check_metadata, check_schema, defaulted, get_fields, list_runs, metadata,
                                   open_file, opened, read, run_group, run_names, strings_crc, valid_name)
 from pnrotor.results import ARRAYS, KINDS, NOT_WRITTEN, REQUIRED_KEYS, UNITS, Array, check, layout_problems
 from pnrotor.results.schema import ARRAY_KINDS, is_strings
 
-__all__ = ["write", "read", "batch", "Batch", "image", "concatenate", "metadata", "list_runs", "check",
+__all__ = ["write", "read", "batch", "Batch", "Journaled", "image", "concatenate", "metadata", "list_runs", "check",
            "layout_problems", "valid_name", "KINDS", "ARRAYS", "UNITS", "REQUIRED_KEYS", "NOT_WRITTEN", "Array",
            "SCHEMA_VERSION", "BATCH", "COMPRESSIONS"]
 
@@ -269,6 +270,60 @@ class Batch:
             raise
         self.names.append(name)
         self._added.add(name)
+
+
+class Journaled:
+    """A batch file grown in place, run by run, that a process death leaves as of its last `add` (`pnrotor.io.journal`;
+    ``pnrotor evolve --batch`` builds its file so, in ``OUTPUT.parts``): each run's bytes are written once, and
+    `publish` gives the finished file its name.  Opening it completes or undoes what a death interrupted.  A
+    `ValueError` (a run `write` refuses) or any other exception in `add` or `remove` leaves the file as it was."""
+
+    def __init__(self, path, journal, *, compression=None, checksum=True):
+        _check_compression(compression)
+        _check_checksum(checksum)
+        self.path, self.journal, self.compression, self.checksum = Path(path), Path(journal), compression, checksum
+        self._committed = journal_file.recover(self.path, self.journal)
+
+    def names(self):
+        """The runs in the file (its top-level groups), sorted."""
+        if not self._committed:
+            return []
+        with opened(self.path) as f:
+            return run_names(f)
+
+    def add(self, runs):
+        """Write the runs {name: run dataclass} (checked first as `write` checks them), in one commit."""
+        for name, run in runs.items():
+            _check_name(name, "run name")
+            _check_run(run)
+        atomic.check_space(self.path, sum(_run_bytes(run) for run in runs.values()), self.compression)
+        self._commit(lambda f: [_put_run(f.create_group(name), run, self.compression, self.checksum)
+                                for name, run in runs.items()])
+
+    def remove(self, names):
+        """Remove the runs `names` from the file, in one commit (their bytes stay, unreferenced)."""
+        self._commit(lambda f: [f.__delitem__(name) for name in names if name in f])
+
+    def _commit(self, change):
+        with journal_file.JournaledFile(self.path, self.journal, self._committed) as file:
+            try:
+                with h5py.File(file, "r+" if self._committed else "w", libver=("v110", "v110")) as f:
+                    if not self._committed:
+                        _put_metadata(f, BATCH)
+                    change(f)
+                file.commit()
+            except BaseException:
+                file.rollback()
+                raise
+            self._committed = file.committed
+
+    def publish(self, path, overwrite):
+        """fsync the file and give it the name `path` (`pnrotor.io.atomic.publish`), then fsync its folder."""
+        path = Path(path)
+        atomic.fsync(self.path)
+        atomic.publish(self.path, path, overwrite)
+        atomic.fsync(path.parent)
+        self.journal.unlink(missing_ok=True)
 
 
 def concatenate(path, sources, *, overwrite=False, compression=None, checksum=True):
