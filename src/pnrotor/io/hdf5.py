@@ -305,17 +305,15 @@ class Journaled:
         self._commit(lambda f: [f.__delitem__(name) for name in names if name in f])
 
     def _commit(self, change):
-        with journal_file.JournaledFile(self.path, self.journal, self._committed) as file:
-            try:
+        try:
+            with journal_file.JournaledFile(self.path, self.journal, self._committed) as file:
                 with h5py.File(file, "r+" if self._committed else "w", libver=("v110", "v110")) as f:
                     if not self._committed:
                         _put_metadata(f, BATCH)
                     change(f)
                 file.commit()
-            except BaseException:
-                file.rollback()
-                raise
-            self._committed = file.committed
+        finally:   # after a failure, the file as of the last commit (or of this one, if its journal was written)
+            self._committed = journal_file.recover(self.path, self.journal)
 
     def publish(self, path, overwrite):
         """fsync the file and give it the name `path` (`pnrotor.io.atomic.publish`), then fsync its folder."""

@@ -102,11 +102,6 @@ class JournaledFile:
             _record(self.journal, self._length, [])
         self.committed, self._pages = self._length, {}
 
-    def rollback(self):
-        """Forget what was written since the last commit: the file is as committed."""
-        self._pages, self._length = {}, self.committed
-        os.ftruncate(self._fd, self.committed)
-
     def close(self):
         if self._fd is not None:
             os.close(self._fd)
