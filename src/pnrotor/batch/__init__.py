@@ -14,7 +14,7 @@ runs start, ``plan(…)`` then ``Plan.run()``) is what ``pnrotor evolve --batch`
   every row is done the file is fsynced and renamed to the output, and the folder removed.  Interrupted, the
   finished runs stay in ``OUTPUT.parts`` and ``resume=True`` (``pnrotor evolve --batch F --resume``) computes only
   the others, after checking that the table is the one that made them (a run that no longer reads back is
-  computed again).  Ctrl-C is deferred while HDF5 writes (:class:`_InterruptFlag`) and stops the workers.
+  computed again).  Ctrl-C is deferred while HDF5 writes (:class:`InterruptFlag`) and stops the workers.
 
 A row that fails keeps its message in :attr:`~pnrotor.batch.table.Row.error`; the others are written.
 """
@@ -105,16 +105,16 @@ class Plan:
         done = self._stored(store) if self.resume else {}
         tasks = [(i, params) for i, params in self.tasks if i not in done]
         evolve_seconds, results = 0.0, None
-        interrupted = _InterruptFlag()
+        interrupted = InterruptFlag()
         try:
             if self.scheduler is not None:
                 results = backends.results_dask(tasks, self.scheduler)
             if self.tasks:
-                (self.parts / _TABLE).write_text(self._fingerprint())
+                (self.parts / TABLE).write_text(self._fingerprint())
             if self.scheduler is None:
                 results = (backends.results_serial(tasks) if self.jobs == 1 or len(tasks) <= 1 else
                            backends.results_pool(tasks, self.jobs))
-            with interrupted.deferred(), _progress_bar(len(tasks), enabled=progress) as bar:
+            with interrupted.deferred(), progress_bar(len(tasks), enabled=progress) as bar:
                 for index, ok, result in interrupted.interruptible(results):
                     if ok:
                         ok, result = self._add(store, index, result)
@@ -136,7 +136,7 @@ class Plan:
                 results.close()  # stops the workers early after an error
             interrupted.restore()
         if done:
-            interrupted = _InterruptFlag()
+            interrupted = InterruptFlag()
             try:
                 with interrupted.deferred():
                     store.publish(self.path, self.overwrite)
@@ -185,7 +185,7 @@ class Plan:
     def _kept(self):
         """Whether :attr:`parts` holds results of an earlier attempt, after checking that they are this table's (its
         fingerprint, a ValueError otherwise)."""
-        table = self.parts / _TABLE
+        table = self.parts / TABLE
         if not table.exists() and not any(self.parts.glob(self._PARTS)):   # nothing kept: a first attempt
             return False
         if not table.exists() or table.read_text() != self._fingerprint():
@@ -246,7 +246,7 @@ class Plan:
             raise
 
 
-_TABLE = "table.sha256"
+TABLE = "table.sha256"
 """In the parts folder: the fingerprint of the table whose runs it holds."""
 _RUNS, _JOURNAL = "runs.h5", "runs.journal"
 """In the parts folder: the batch file being built, a run added as each finishes, and its journal
@@ -332,7 +332,7 @@ def run(table, output, *, progress=False, **options):
     return plan(table, output, **options).run(progress=progress)
 
 
-class _InterruptFlag:
+class InterruptFlag:
     """Ctrl-C is remembered and raised as KeyboardInterrupt at once, or by `check` after a `deferred` block
     (inside one, also when `interruptible` waits for its next item).
 
@@ -386,7 +386,7 @@ class _InterruptFlag:
         self.previous = {}
 
 
-def _progress_bar(total, enabled, unit="run"):
+def progress_bar(total, enabled, unit="run"):
     """A tqdm bar on stderr (`unit`s done, their rate, the time left), without tqdm's monitor thread (a thread would
     make later worker pools avoid 'fork'), or a stand-in that does nothing."""
     if not enabled:

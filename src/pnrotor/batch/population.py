@@ -42,7 +42,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pnrotor.batch import _TABLE, Outcome, _InterruptFlag, _progress_bar, backends, check_output
+from pnrotor.batch import TABLE, InterruptFlag, Outcome, backends, check_output, progress_bar
 from pnrotor.batch import Plan as _BatchPlan
 from pnrotor.batch.table import Row, TableFile, parse_row
 from pnrotor.results.populations import STATE, PopulationTable
@@ -240,16 +240,16 @@ class Plan(_BatchPlan):
         jobs = min(self.jobs, len(self.tasks) - len(done))
         if self.scheduler is not None:
             results = backends.results_dask(tasks(), self.scheduler, work, window=lambda threads: 2 * threads)
-        (self.parts / _TABLE).write_text(self._fingerprint())
+        (self.parts / TABLE).write_text(self._fingerprint())
         if self.scheduler is None and jobs <= 1:
             results = (result for task in tasks() for result in work([task]))
         elif self.scheduler is None:
             results = backends.pool_results(work, ([task] for task in tasks()), jobs, window=2 * jobs,
                                             thread_count=max(1, (os.cpu_count() or 1) // jobs))
         evolve_seconds = 0.0
-        interrupted = _InterruptFlag()
+        interrupted = InterruptFlag()
         try:
-            with interrupted.deferred(), _progress_bar(remaining, enabled=progress, unit="row") as bar:
+            with interrupted.deferred(), progress_bar(remaining, enabled=progress, unit="row") as bar:
                 for index, ok, result in interrupted.interruptible(results):
                     records = pending.pop(index)
                     if not ok:   # a worker lost (twice for a pool): every row of the chunk fails with the reason

@@ -58,6 +58,7 @@ from pnrotor.pn.settings import settings
 from pnrotor.waveform import amplitudes as _amp
 from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.results.waves import Modes, Polarizations, angle
+from pnrotor.values import real
 from pnrotor.waveform.distance import scale as _scale
 from pnrotor.waveform.modes import ELL_MAX, check_arguments, check_memory_flag, spins_and_frame, tides_of, wave_inputs
 from pnrotor.waveform import polarizations as _pol
@@ -366,7 +367,7 @@ def modes(m1, *args, **kwargs):
       integrator's dense output without forming its history."""
     if isinstance(m1, Evolution):
         return modes_of_run(m1, *args, **kwargs)
-    if not (_ini._real(m1) or hasattr(m1, "unit")):   # a mass: a number, or an astropy Quantity
+    if not (real(m1) or hasattr(m1, "unit")):   # a mass: a number, or an astropy Quantity
         raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads) or a "
                         f"binary's m1, m2, chi1, chi2, f_ref with delta_t=..., got {type(m1).__name__}")
     return _binary_modes(m1, *args, **kwargs)
