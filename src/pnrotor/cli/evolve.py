@@ -197,9 +197,12 @@ def run(args):
 def _output_path(args, stem):
     """The output file, checked before anything is computed: (path, whether its folder is the default)."""
     if args.output is not None:
+        from pnrotor import io
+
         path = Path(args.output)
         if path.is_dir():
             raise IsADirectoryError(f"{path} is a folder; give a file name such as {path / (stem + '.h5')}")
+        io.format_of(path)
         if not path.parent.is_dir():
             raise FileNotFoundError(f"folder {path.parent} does not exist (-o {path}); create it first")
         default = False
@@ -282,7 +285,9 @@ def _run_one(args):
             for name, result in groups:
                 batch.add(name, result)
     else:
-        hdf5.write(path, run, overwrite=args.overwrite, **storage)
+        from pnrotor import io
+
+        io.write(path, run, overwrite=args.overwrite, **storage)
     if not args.quiet:
         print("\n".join(summary(_ends(run) if uniform else run, time.perf_counter() - start, samples)))
         if args.modes:

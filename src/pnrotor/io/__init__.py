@@ -16,17 +16,22 @@ each is imported when a file of its suffix is first written.
 import importlib
 from pathlib import Path
 
-__all__ = ["write", "FORMATS"]
+__all__ = ["write", "format_of", "FORMATS"]
 
 FORMATS = {".h5": "pnrotor.io.hdf5", ".hdf5": "pnrotor.io.hdf5"}
 """Suffix of a file (lower case) → the module that writes results in that format."""
 
 
-def write(path, result, **options):
-    """Write `result` to `path` in the format of its suffix (`FORMATS`) → the path written; a ValueError naming
-    ``path`` for a suffix no format writes."""
+def format_of(path):
+    """The name of the module that writes files named `path` (`FORMATS`, by its suffix), without importing it; a
+    ValueError naming `path` and the suffixes pnrotor writes otherwise (callers check before computing)."""
     suffix = Path(path).suffix.lower()
     if suffix not in FORMATS:
-        raise ValueError(f"path {str(path)!r}: no format of pnrotor writes files ending in {suffix or 'no suffix'!r}; "
-                         f"it writes {', '.join(sorted(FORMATS))}")
-    return importlib.import_module(FORMATS[suffix]).write(path, result, **options)
+        raise ValueError(f"{path}: pnrotor writes files ending in {', '.join(sorted(FORMATS))}, not "
+                         f"{repr(suffix) if suffix else 'a name without a suffix'}")
+    return FORMATS[suffix]
+
+
+def write(path, result, **options):
+    """Write `result` to `path` in the format of its suffix (:func:`format_of`) → the path written."""
+    return importlib.import_module(format_of(path)).write(path, result, **options)
