@@ -153,8 +153,8 @@ def test_a_nohup_or_background_batch_survives_the_signal_it_ignores(tmp_path, na
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the pause reaches the workers by fork")
 def test_ctrl_c_of_a_jobs_batch_prints_one_line_with_the_resume_hint(tmp_path):
     """Ctrl-C (SIGINT to the process group) while the workers compute: one line, with the hint. The
-    workers took SIGINT while they wrote their part files, and SIGTERM (how the batch stops them) with the command's handler, and
-    printed "Process ForkProcess-2" tracebacks or "Exception ignored in sys.unraisablehook"."""
+    workers (which wrote part files then) took SIGINT while they wrote, and SIGTERM (how the batch stops them) with
+    the command's handler, and printed "Process ForkProcess-2" tracebacks or "Exception ignored in sys.unraisablehook"."""
     process = _paused_batch(tmp_path, 60, 4)
     try:
         os.killpg(process.pid, signal.SIGINT)

@@ -119,8 +119,8 @@ def _size(n):
 
 
 def temporary_beside(path, sweep=True, suffix=""):
-    """Create and return an empty, new file ``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp`` (then `suffix`) in the folder of `path`,
-    after removing those of `path` that writers on this host left when they died (`_sweep`; not for scratch
+    """Create and return an empty, new file ``NAME.HOST.PID.XXXXXXXX.pnrotor-tmp`` (then `suffix`) in the folder of
+    `path`, after removing those of `path` that writers on this host left when they died (`_sweep`; not for scratch
     files, written by the thousand into one folder, where listing it each time would cost N²)."""
     if sweep:
         _sweep(path)

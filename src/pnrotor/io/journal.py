@@ -5,10 +5,10 @@ A :class:`JournaledFile` is a file-like object (what h5py's ``fileobj`` driver, 
 for) on a file whose first ``committed`` bytes hold its last committed state.  Bytes written beyond them go to the file
 at once; bytes written over them (a format's headers, indexes and free-space records) are kept in memory, a page at a
 time, until :meth:`JournaledFile.commit`, which writes the pages and the new length to the journal (a file beside,
-replaced by a rename, so it is whole or absent), then over the file, then the journal again with the length alone.  :func:`recover` applies the journal
-again (idempotent) and cuts the file to the committed length: after a death during a piece, the piece is gone and
-the rest is exactly as committed; after a death during a commit, the commit is completed.  So each byte of a piece is
-written once (the pages, a few kB per piece, twice).
+replaced by a rename, so it is whole or absent), then over the file, then the journal again with the length alone.
+:func:`recover` applies the journal again (idempotent) and cuts the file to the committed length: after a death during
+a piece, the piece is gone and the rest is exactly as committed; after a death during a commit, the commit is
+completed.  So each byte of a piece is written once (the pages, a few kB per piece, twice).
 
 Like a file that is not fsynced, this survives the death of the process, not a power loss: the caller fsyncs what
 must survive that (:mod:`pnrotor.io.atomic` before it publishes a finished file).
