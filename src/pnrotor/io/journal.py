@@ -48,8 +48,9 @@ class JournaledFile:
         view = memoryview(buffer).cast("B")
         end = min(self._pos + len(view), self._length)
         n = max(end - self._pos, 0)
-        got = os.preadv(self._fd, [view[:n]], self._pos) if n else 0
-        view[got:n] = bytes(n - got)   # a range HDF5 has reserved but not yet written reads as zeros
+        data = os.pread(self._fd, n, self._pos) if n else b""
+        view[:len(data)] = data
+        view[len(data):n] = bytes(n - len(data))   # a range reserved but not yet written reads as zeros
         for page in range(self._pos // PAGE, (end - 1) // PAGE + 1) if n else ():
             data = self._pages.get(page)
             if data is not None:
