@@ -10,7 +10,6 @@ import math
 import numpy as np
 import pytest
 
-import pnrotor
 from pnrotor import batch, hdf5
 from pnrotor.cli import main
 from pnrotor.pn import evolve, evolve_many, system

@@ -133,14 +133,14 @@ def read_batch(path, cli_defaults):
 
 def parse_row(number, label, record, cli_defaults):
     """The :class:`Row` of a record (column → cell; empty cells absent): its parameters and name, or its error."""
-    from pnrotor.hdf5 import _valid_name   # what can name a group (not at import: the CLI starts without h5py)
+    from pnrotor.hdf5 import valid_name   # what can name a group (not at import: the CLI starts without h5py)
 
     row = Row(number, label)
     try:
         row.params, row.name = _row_parameters(record, cli_defaults)
     except ValueError as error:
         row.error = str(error)
-        if _valid_name(record.get("name")):   # a failure still says which row it is
+        if valid_name(record.get("name")):   # a failure still says which row it is
             row.name = record["name"]
     return row
 
@@ -338,12 +338,12 @@ def _row_parameters(record, cli_defaults):
             params[key] = _bool(value, key)
         else:
             params[key] = _float(value, key)
-    from pnrotor.hdf5 import _valid_name
+    from pnrotor.hdf5 import valid_name
 
     name = record.get("name")
     if name is None:
         name = default_name(params)
-    elif not _valid_name(name):
+    elif not valid_name(name):
         raise ValueError(f"name {name!r} is not a valid group name (non-empty, no '/', not '.')")
     else:
         default_name(params)  # checks the approximant before the run

@@ -200,9 +200,12 @@ def run(args):
 def _output_path(args, stem):
     """The output file, checked before anything is computed: (path, whether its folder is the default)."""
     if args.output is not None:
+        from pnrotor import io
+
         path = Path(args.output)
         if path.is_dir():
             raise IsADirectoryError(f"{path} is a folder; give a file name such as {path / (stem + '.h5')}")
+        io.format_of(path)
         if not path.parent.is_dir():
             raise FileNotFoundError(f"folder {path.parent} does not exist (-o {path}); create it first")
         default = False
@@ -235,6 +238,7 @@ def _run_one(args):
     uniform = isinstance(params["sampling"], float)
     path, default_folder = _output_path(args, default_name(params))
     if args.modes or args.polarizations:
+        from pnrotor.results.waves import angle
         from pnrotor.waveform import modes
 
         ell_max, order2, distance = modes.check_arguments(*_modes_options(args))
@@ -243,8 +247,8 @@ def _run_one(args):
             raise UsageError("--polarizations needs a time step --sampling DT (e.g. 1/4096): h+, hx on a uniform grid")
         if args.inclination is None or distance is None:
             raise UsageError("--polarizations needs --inclination (radians) and --distance (Mpc)")
-        line_of_sight = dict(inclination=modes._angle(args.inclination, "--inclination"),
-                             phi_ref=modes._angle(args.phi_ref or 0.0, "--phi-ref"))
+        line_of_sight = dict(inclination=angle(args.inclination, "--inclination"),
+                             phi_ref=angle(args.phi_ref or 0.0, "--phi-ref"))
 
     from pnrotor.pn.evolve import check_inputs
 
@@ -284,7 +288,9 @@ def _run_one(args):
             for name, result in groups:
                 batch.add(name, result)
     else:
-        hdf5.write(path, run, overwrite=args.overwrite, **storage)
+        from pnrotor import io
+
+        io.write(path, run, overwrite=args.overwrite, **storage)
     if not args.quiet:
         print("\n".join(summary(_ends(run) if uniform else run, time.perf_counter() - start, samples)))
         if args.modes:

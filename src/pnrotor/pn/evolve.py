@@ -42,11 +42,10 @@ import inspect
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..history import short_repr
 from ..ode import EVENTS_SIG, RHS_SIG, by_address
 from ..ode.common import OUT_FINAL, OUT_STEPS, controller, default_hook
 from ..ode.dop853 import run_core
@@ -57,6 +56,7 @@ from . import system as _sys
 from .sampling import compile_output_kernel, sample
 from .series import basis_values, kmax_from_orders
 from .settings import normalize_approximant, settings
+from pnrotor.results.runs import Evolution
 
 TERMINATION_MESSAGES = {
     "f_max": "v reached the requested end frequency f_max",
@@ -80,86 +80,6 @@ makes every few steps a rejection (18–57 of 116–216 attempts in the LALSuite
 (0.85, 4) there are none and the runs cost 10–35% fewer evaluations (benchmarks/bench_pn.py)."""
 _CONTROLLER = controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
 """(safety, min_factor, max_factor) as :func:`pnrotor.ode.dop853` would check them (min_factor its default)."""
-
-
-@dataclass
-class Evolution:
-    """History of a PN evolution: plain arrays and scalars (HDF5-friendly).
-
-    Attributes
-    ----------
-    t : (N,) times in units of the total mass M (t = 0 at f_ref)
-    t_seconds : (N,) the same in seconds
-    v : (N,) PN parameter v = (M Ω_orb)^{1/3}
-    Phi : (N,) orbital phase Φ (Φ = 0 at t = 0)
-    chi1, chi2 : (N, 3) dimensionless spins in the inertial frame
-    R : (N, 4) unit orbital-frame rotor (w, x, y, z), sign-continuous: n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹
-    ell_hat : (N, 3) orbital angular momentum direction ℓ̂ = R ẑ R⁻¹
-    termination : str — why the forward integration stopped (see module docstring)
-    stats : dict — nfev, nsteps, naccepted, nrejected (both halves), per-half counts, wall times,
-        backward termination, messages
-    inputs : dict — every input, with units in the key names; only floats, ints, bools, strings and
-        lists of floats (absent f_min/f_max and the value of 'steps'/'final' sampling are NaN)
-
-    In a nonspinning or aligned run (``inputs['state'] == 'aligned'``) chi1, chi2 and ell_hat are constant: they
-    are read-only (N, 3) views of their one row (zero stride along N, as ``np.broadcast_to`` gives);
-    ``run.chi1.copy()`` gives a writable C-ordered array.
-    """
-
-    t: np.ndarray
-    t_seconds: np.ndarray
-    v: np.ndarray
-    Phi: np.ndarray
-    chi1: np.ndarray
-    chi2: np.ndarray
-    R: np.ndarray
-    ell_hat: np.ndarray
-    termination: str
-    stats: dict = field(default_factory=dict)
-    inputs: dict = field(default_factory=dict)
-
-    __repr__ = short_repr
-
-    @property
-    def n_hat(self):
-        """Separation direction n̂ = R x̂ R⁻¹, (N, 3)."""
-        w, x, y, z = self.R.T
-        return np.column_stack((1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)))
-
-    @property
-    def f_gw(self):
-        """Gravitational-wave frequency 2 f_orb = v³/(π M) in Hz."""
-        return _ini.frequency_from_v(self.v, self.inputs["M_seconds"])
-
-    def __len__(self):
-        return self.t.size
-
-    def span(self):
-        """(t_start, t_end in M, v_start, v_end, orbits, whether the orbits span the whole integration).
-
-        Times and v are those of the whole integration whatever the sampling (without f_min the start is f_ref,
-        where Φ = 0). The orbits (Φ_end − Φ_start)/2π are exact when the samples include both ends (sampling
-        'steps', or 'final' without f_min); otherwise they are counted between the first and last samples (a
-        Δt or per-orbit grid), or None (one sample that is not the start)."""
-        stats, inputs = self.stats, self.inputs
-        backward = stats["termination_backward"] != "not_integrated"
-        t0, t1 = stats["t_initial"], stats["t_final"]
-        n = len(self)
-        if not backward:
-            v0, phi0 = inputs["v_ref"], 0.0
-        elif n and self.t[0] == t0:
-            v0, phi0 = self.v[0].item(), self.Phi[0].item()
-        elif stats["termination_backward"] == "f_min":
-            v0, phi0 = (math.pi * inputs["M_seconds"] * inputs["f_min_Hz"]) ** (1 / 3), None
-        else:
-            v0, phi0 = (self.v[0].item() if n else math.nan), None
-        v1 = stats["v_final"]
-        phi1 = self.Phi[-1].item() if n and self.t[-1] == t1 else None
-        if phi0 is not None and phi1 is not None:
-            return t0, t1, v0, v1, (phi1 - phi0) / (2 * math.pi), True
-        if n >= 2:
-            return t0, t1, v0, v1, (self.Phi[-1] - self.Phi[0]).item() / (2 * math.pi), False
-        return t0, t1, v0, v1, None, False
 
 
 # ---------------------------------------------------------------------------------------------------
