@@ -87,8 +87,9 @@ class Settings:
 
     @property
     def use_aligned(self):
-        """Whether the run integrates only [v, Φ] (nonspinning or aligned spins, no integrate_rotor)."""
-        return self.spin_content != "precessing" and not self.integrate_rotor
+        """Whether the run integrates only [v, Φ] (nonspinning or aligned spins, neither integrate_rotor nor
+        horizon_absorption, whose spins change)."""
+        return self.spin_content != "precessing" and not (self.integrate_rotor or self.horizon_absorption)
 
     def inputs(self):
         """`Evolution.inputs`: every input, with units in the key names; only floats, ints, bools, strings and
@@ -178,6 +179,9 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
         precession_phase_shift = so_order >= 3.0
     if not isinstance(horizon_absorption, _ini._BOOLS):
         raise ValueError(f"horizon_absorption must be True or False, got {horizon_absorption!r}")
+    if horizon_absorption and precession == "instantaneous":
+        raise ValueError("horizon_absorption needs the orbit-averaged precession ('averaged' or 'averaged_varpi'): its "
+                         "flux into the horizons is averaged over the orbit; got precession='instantaneous'")
     return Options(approximant, pn_order, so_order, ss_order, tidal_order, atol, rtol, mode, sval, rotor,
                    precession_phase_shift, integrate_rotor, precession, int(max_steps), bool(horizon_absorption))
 
@@ -196,10 +200,6 @@ def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, 
     lambda2 = _nonnegative(lambda2, "lambda2", _LAMBDA)
     M_sec, X1, v0, v_min, v_max = frequencies(m1, m2, f_ref, f_min, f_max)
     spin_content, c1, c2 = _spin_content(c1, c2, ell)
-    if o.horizon_absorption and (spin_content == "precessing" or o.integrate_rotor):
-        raise ValueError("horizon_absorption takes nonspinning binaries and spins along ell_hat (the flux into a "
-                         "tilted horizon, averaged over the orbit, is not implemented); these spins precess"
-                         if spin_content == "precessing" else "horizon_absorption needs integrate_rotor=False")
     return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, ell, n, kappa1, kappa2, lambda1, lambda2, *o, M_sec, X1,
                     X1 * (1.0 - X1), v0, v_min, v_max, _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
 
@@ -294,7 +294,7 @@ def population_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_h
         for i in np.flatnonzero(ok & ~same).tolist():
             R0[i] = _frame_rotor(frames[i].tobytes())
     return Binaries(M_sec, X1, X1 * (1.0 - X1), v0, np.where(has_min, v_min, np.nan), np.where(has_max, v_max, 1.0),
-                    c1, c2, ell, R0, ~precessing & (not o.integrate_rotor), ok)
+                    c1, c2, ell, R0, ~precessing & (not (o.integrate_rotor or o.horizon_absorption)), ok)
 
 
 @functools.lru_cache(maxsize=16)

@@ -11,7 +11,8 @@ also compiled with ``fastmath={'contract'}`` and nothing else of fastmath: a pro
 into one FMA (one rounding instead of two, where the CPU has FMA; 10–15% faster, measured), nothing is
 reordered, and inf and nan propagate as without it.
 
-* :func:`rhs_precessing` — state ``y = [v, χ₁(3), χ₂(3), R(4), Φ]`` (12 components);
+* :func:`rhs_precessing` — state ``y = [v, χ₁(3), χ₂(3), R(4), Φ]`` (12 components; with horizon absorption 14,
+  the masses m₁, m₂ in units of M at f_ref appended);
 * :func:`rhs_aligned` — nonspinning and aligned spins, ``y = [v, Φ]``: ℓ̂ and the spins are constant,
   the spin equations and the precession are not integrated at all, and the frame is reconstructed
   exactly as R(t) = R₀ exp(Φ ẑ/2).
@@ -34,9 +35,14 @@ Equations (units G = c = M = 1, t in units of M)
 
   with neutron-star tides, the 5PN and 6PN tidal terms of Ê and F̂ (Vines et al. 2011) added to F̂ and Ê′ (T1)
   or carried through the re-expansion to first order in Λᵢ (T4, T5), as LALSuite's SpinTaylor does
-  (:func:`_add_tides`).
+  (:func:`_add_tides`).  With horizon absorption (p[P_HORIZON] ≠ 0, precessing state only) the flux into both
+  horizons (a body with Λᵢ > 0, a neutron star, has none), averaged over the orbit
+  (:func:`pnrotor.pn.flux.horizon_rates`), is computed at the current spins in the right-hand side and the events
+  and added at first order: N + F̂_H (T1, T4), D − F̂_H (T5).
 
-* Spins: χ̇ᵢ = Ωᵢ × χᵢ (:mod:`~pnrotor.pn.precession`).
+* Spins: χ̇ᵢ = Ωᵢ × χᵢ (:mod:`~pnrotor.pn.precession`); with horizon absorption also + (Ṡᵢ/Xᵢ²) χ̂ᵢ − 2(ṁᵢ/Xᵢ) χᵢ,
+  the angular momentum and mass each horizon absorbs (Ṡᵢ, taken from the orbit, enters Ω_ℓ too), and the masses
+  ṁᵢ are integrated as y[Y_M1], y[Y_M2].
 * Frame: dR/dt = ½ Ω R with ℓ̂ = R ẑ R⁻¹, n̂ = R x̂ R⁻¹ (Boyle 2016, arXiv:1604.08139,
   eq:integrate-spinor; R unnormalized, its norm cancels in R v R⁻¹).  The orbital frame rotates with
   Ω = Φ̇ ℓ̂ + Ω_ℓ, Ω_ℓ = −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| the orbit-averaged precession of the orbital plane.
@@ -86,7 +92,7 @@ from numba import njit
 
 from ..ode.common import events_function
 from .energy import energy_derivative_series, energy_series
-from .flux import flux_series
+from .flux import flux_series, horizon_rates
 from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms, spin_orbit_precession,
                          spin_spin_precession_2pn, spin_spin_precession_3pn, spin_spin_precession_3pn_instantaneous,
                          varpi_coefficients)
@@ -102,6 +108,9 @@ Y_CHI2 = 4      # 4, 5, 6
 Y_R = 7         # 7, 8, 9, 10  (w, x, y, z)
 Y_PHI = 11
 N_PRECESSING = 12
+# with horizon absorption (P_HORIZON ≠ 0) the precessing state carries the masses too: [v, χ₁, χ₂, R, Φ, m₁, m₂]
+Y_M1 = 12
+Y_M2 = 13
 # aligned state
 YA_V = 0
 YA_PHI = 1
@@ -138,8 +147,11 @@ P_VARPI2 = 34    # ... body 2
 P_ISS1 = 37      # body 1: 2PN a_j, a_jn, a_in; 3PN b_j, b_jn, b_jλ, b_in, b_iλ (zeroed when truncated)
 P_ISS2 = 45      # ... body 2
 P_OMEGA_L = 53   # 0: Ω_ℓ from −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| (LALSuite); 1: its spin-orbit part from ⟨ϖ n̂⟩ (Bohé+ 2013)
+P_HORIZON = 54   # horizon absorption: 0 none; 1 F̂_H added to N (T1, T4); −1 subtracted from D (T5)
+P_HX1 = 55       # with horizon absorption: X₁ if body 1 has a horizon (Λ₁ = 0), 0 for a neutron star (no absorption)
+P_HX2 = 56       # ... body 2
 # the series N, D, Ê′, each a header and its coefficients (series.fold_and_store)
-P_NUM = 54
+P_NUM = 57
 P_DEN = P_NUM + SERIES_SLOTS
 P_EP = P_DEN + SERIES_SLOTS
 P_SIZE = P_EP + SERIES_SLOTS
@@ -197,6 +209,23 @@ def _folded(p, off, v, lnv):
 
 
 @njit(cache=True, inline="always")
+def _horizon_flux(p, v, a1, s11, a2, s22):
+    """(F̂_H, v ∂F̂_H/∂v) of both horizons (:func:`pnrotor.pn.flux.horizon_rates`) at v, with ℓ̂·χᵢ = aᵢ, χᵢ² = sᵢᵢ."""
+    f1, f1_v, _, _ = horizon_rates(p[P_HX1], p[P_NU], v, a1, s11)
+    f2, f2_v, _, _ = horizon_rates(p[P_HX2], p[P_NU], v, a2, s22)
+    return f1 + f2, f1_v + f2_v
+
+
+@njit(cache=True, inline="always")
+def _add_horizon(p, f, f_v, num, num_v, den, den_v):
+    """(N, vN′, D, vD′) of v̇ with the flux into the horizons F̂_H (and v ∂F̂_H/∂v) in the energy balance at first
+    order: added to N (T1: F̂ + F̂_H; T4: F̂/Ê′ + F̂_H, p[P_HORIZON] = 1), subtracted from D = [Ê′/F̂] (T5, −1)."""
+    if p[P_HORIZON] > 0.0:
+        return num + f, num_v + f_v, den, den_v
+    return num, num_v, den - f, den_v - f_v
+
+
+@njit(cache=True, inline="always")
 def _vdot(p, v, num, den):
     """v̇ = (32ν/5) v⁹ N/D from N(v) and D(v) (module docstring)."""
     v3 = v * v * v
@@ -217,7 +246,15 @@ def rhs_precessing(t, y, p, dydt):
     X2 = p[P_X2]
     b = _spin_basis(y, lx, ly, lz)
     a1, a2 = b[0], b[1]
-    vdot = _vdot(p, v, _series(p, P_NUM, v, lnv, b)[0], _series(p, P_DEN, v, lnv, b)[0])
+    num = _series(p, P_NUM, v, lnv, b)[0]
+    den = _series(p, P_DEN, v, lnv, b)[0]
+    horizon = p[P_HORIZON] != 0.0
+    s1 = s2 = m1 = m2 = 0.0
+    if horizon:   # the flux into the horizons and the spins' and masses' rates (flux.horizon_rates; none for a star)
+        f1, _, s1, m1 = horizon_rates(p[P_HX1], p[P_NU], v, a1, b[4])
+        f2, _, s2, m2 = horizon_rates(p[P_HX2], p[P_NU], v, a2, b[6])
+        num, _, den, _ = _add_horizon(p, f1 + f2, 0.0, num, 0.0, den, 0.0)
+    vdot = _vdot(p, v, num, den)
     v2 = v * v
     v3 = v2 * v
     v5 = v3 * v2
@@ -261,6 +298,18 @@ def rhs_precessing(t, y, p, dydt):
     q2 = X2 * X2
     ex1, ey1, ez1 = d1x - so1 * (ly * c1z - lz * c1y), d1y - so1 * (lz * c1x - lx * c1z), d1z - so1 * (lx * c1y - ly * c1x)
     ex2, ey2, ez2 = d2x - so2 * (ly * c2z - lz * c2y), d2y - so2 * (lz * c2x - lx * c2z), d2z - so2 * (lx * c2y - ly * c2x)
+    if horizon:
+        # the angular momentum Ṡᵢ each horizon absorbs, along χ̂ᵢ (ℓ̂ for a hole without spin), is the orbit's (so it
+        # tilts ℓ̂ too, in Ω_ℓ); the mass ṁᵢ rescales χᵢ = Sᵢ/mᵢ²: χ̇ᵢ ∋ (Ṡᵢ/Xᵢ²) χ̂ᵢ − 2(ṁᵢ/Xᵢ) χᵢ
+        t1x, t1y, t1z = _along_spin(s1 / q1, b[4], c1x, c1y, c1z, lx, ly, lz)
+        t2x, t2y, t2z = _along_spin(s2 / q2, b[6], c2x, c2y, c2z, lx, ly, lz)
+        ex1, ey1, ez1 = ex1 + t1x, ey1 + t1y, ez1 + t1z
+        ex2, ey2, ez2 = ex2 + t2x, ey2 + t2y, ez2 + t2z
+        h1, h2 = 2.0 * m1 / X1, 2.0 * m2 / X2
+        d1x, d1y, d1z = d1x + t1x - h1 * c1x, d1y + t1y - h1 * c1y, d1z + t1z - h1 * c1z
+        d2x, d2y, d2z = d2x + t2x - h2 * c2x, d2y + t2y - h2 * c2y, d2z + t2z - h2 * c2z
+        dydt[Y_M1] = m1
+        dydt[Y_M2] = m2
     sx = q1 * ex1 + q2 * ex2
     sy = q1 * ey1 + q2 * ey2
     sz = q1 * ez1 + q2 * ez2
@@ -304,6 +353,15 @@ def rhs_precessing(t, y, p, dydt):
     dydt[5] = d2y
     dydt[6] = d2z
     dydt[Y_PHI] = phidot
+
+
+@njit(cache=True, inline="always")
+def _along_spin(rate, chi_sq, cx, cy, cz, lx, ly, lz):
+    """rate · χ̂ for the spin χ = (cx, cy, cz) of square norm chi_sq; rate · ℓ̂ where χ = 0."""
+    if chi_sq > 0.0:
+        g = rate / math.sqrt(chi_sq)
+        return g * cx, g * cy, g * cz
+    return rate * lx, rate * ly, rate * lz
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -388,6 +446,9 @@ def events_precessing(t, y, p, g):
     b = _spin_basis(y, lx, ly, lz)
     num, num_v = _series(p, P_NUM, v, lnv, b)
     den, den_v = _series(p, P_DEN, v, lnv, b)
+    if p[P_HORIZON] != 0.0:
+        f, f_v = _horizon_flux(p, v, b[0], b[4], b[1], b[6])
+        num, num_v, den, den_v = _add_horizon(p, f, f_v, num, num_v, den, den_v)
     g[EV_V_END] = v - p[P_VEND]
     g[EV_ENERGY] = _series(p, P_EP, v, lnv, b)[0]
     g[EV_VDOT] = num * den
@@ -509,14 +570,19 @@ def _add_tides(E_raw, F_raw, kmax, approx, N, D, Ep):
 
 @njit(cache=True)
 def _store_series(N, D, Ep, basis, fold, p, v0):
-    """Store N, D, Ê′ (folded for the aligned RHS) in p; return N, D, Ê′ and event 6 at v0."""
+    """Store N, D, Ê′ (folded for the aligned RHS) in p; return N, D, Ê′ and event 6 at v0 (N, D with the flux into
+    the horizons where p[P_HORIZON] asks for it, at the spin invariants ``basis``)."""
     # offsets as np.int64: a plain constant would compile fold_and_store once per offset (Literal[int])
     fold_and_store(N, basis, fold, p, np.int64(P_NUM))
     fold_and_store(D, basis, fold, p, np.int64(P_DEN))
     fold_and_store(Ep, basis, fold, p, np.int64(P_EP))
     Nv, Dv = v_derivative(N), v_derivative(D)
     n0, d0 = eval_at(N, v0, basis), eval_at(D, v0, basis)
-    peak0 = vdot_peak(n0, d0, eval_at(Nv, v0, basis), eval_at(Dv, v0, basis))
+    n0_v, d0_v = eval_at(Nv, v0, basis), eval_at(Dv, v0, basis)
+    if p[P_HORIZON] != 0.0:
+        f, f_v = _horizon_flux(p, v0, basis[1], basis[5], basis[2], basis[7])
+        n0, n0_v, d0, d0_v = _add_horizon(p, f, f_v, n0, n0_v, d0, d0_v)
+    peak0 = vdot_peak(n0, d0, n0_v, d0_v)
     return n0, d0, eval_at(Ep, v0, basis), peak0
 
 
@@ -568,7 +634,7 @@ def _past_end(events, y, p, values, v):
 
 def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0,
                     v_end=1.0, spin_tol=SPIN_TOL, rotor="coprecessing", phase_shift=False, aligned_basis=None,
-                    omega_l="torque", basis=None, v_check=None, horizon=None):
+                    omega_l="torque", basis=None, v_check=None, horizon=False):
     """Build the parameter vector p.
 
     ``kmax``: from :func:`pnrotor.pn.series.kmax_from_orders`.  ``aligned_basis``: the nine
@@ -577,27 +643,24 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     With ``v_check`` (and the invariants ``basis`` at that point) it returns (p, (N, D, Ê′, event 6) at
     v_check) instead of p, for checking the initial point.
     ``spin_tol``: how far |χᵢ|² may exceed 1 before events 3/4 end the run (:func:`spin_tolerance`).
-    ``horizon``: {k: c} of the flux into the horizons F̂_H (:func:`pnrotor.pn.flux.horizon_flux`, aligned runs),
-    added to the energy balance at first order: F̂ + F̂_H in N (T1, T4), D − F̂_H (T5, D = Ê′/F̂ re-expanded).
+    ``horizon``: the flux into the horizons in the energy balance and the spins' and masses' rates
+    (:func:`pnrotor.pn.flux.horizon_rates`; p[P_HORIZON], :func:`_add_horizon`), for the precessing right-hand side
+    with the state [v, χ₁, χ₂, R, Φ, m₁, m₂] (not with ``aligned_basis``).
     Everything but v_end, spin_tol and the stored series comes from :func:`_spin_independent_parts` (cached).
     :func:`start_rows` builds the same p for many binaries at once.
     """
     head, N, D, Ep = _spin_independent_parts(
         (X1, approximant, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
-         math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), lambda1, lambda2, rotor, bool(phase_shift), omega_l))
+         math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), lambda1, lambda2, rotor, bool(phase_shift), omega_l,
+         bool(horizon)))
     p = np.zeros(P_SIZE)
     p[:P_NUM] = head
     p[P_VEND] = v_end
     p[P_SPINTOL] = spin_tol
     fold = aligned_basis is not None
+    if horizon and fold:
+        raise ValueError("horizon absorption needs the precessing right-hand side: no aligned_basis")
     b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
-    if horizon:
-        N, D = N.copy(), D.copy()   # the cached series are shared
-        for k, c in horizon.items():
-            if approximant == "T5":
-                D[k, 0, 0] -= c
-            else:
-                N[k, 0, 0] += c
     at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
     return p if v_check is None else (p, at_v)
 
@@ -626,18 +689,19 @@ def start_rows(heads, N, D, Ep, rows, bases, fold, v_end, spin_tol, c_addr, jit_
 def _spin_independent_parts(key):
     """:func:`spin_independent_parts` of one binary, ``key`` = (X1, approximant, kmax as a tuple, so_order,
     ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives other signed zeros), Λ₁, Λ₂, rotor, phase_shift,
-    omega_l), as (p head, N, D, Ê′), kept in a small LRU cache (repeated runs of one binary, or of one mass
+    omega_l, horizon), as (p head, N, D, Ê′), kept in a small LRU cache (repeated runs of one binary, or of one mass
     ratio, skip its ~65 µs of Python; code that replaces a coefficient function must call
     ``_spin_independent_parts.cache_clear()``).  The arrays are shared: make_parameters copies the head and only
     reads the series."""
-    X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, _, _, lambda1, lambda2, rotor, phase_shift, omega_l = key
+    X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, _, _, lambda1, lambda2, rotor, phase_shift, omega_l, \
+        horizon = key
     p, N, D, Ep = spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor,
-                                         phase_shift, omega_l, lambda1, lambda2)
+                                         phase_shift, omega_l, lambda1, lambda2, horizon)
     return p[0], N[0], D[0], Ep[0]
 
 
 def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor, phase_shift, omega_l,
-                           lambda1=0.0, lambda2=0.0):
+                           lambda1=0.0, lambda2=0.0, horizon=False):
     """Everything :func:`make_parameters` (and :func:`start_rows`) builds that does not depend on the spins or
     v_end, for n binaries that share the options and differ in X1, κ₁, κ₂, Λ₁, Λ₂ (arrays (n,), or floats for one
     binary): (heads (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
@@ -669,6 +733,10 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     p[P_ROTOR] = 1.0 if rotor == "orbital" else 0.0
     p[P_SHIFT] = 1.0 if phase_shift else 0.0
     p[P_OMEGA_L] = 1.0 if omega_l == "varpi" else 0.0
+    if horizon:   # a body with a tidal deformability is a neutron star: no horizon
+        p[P_HORIZON] = -1.0 if approximant == "T5" else 1.0
+        p[P_HX1] = np.where(np.asarray(lambda1) == 0.0, X1, 0.0)
+        p[P_HX2] = np.where(np.asarray(lambda2) == 0.0, X2, 0.0)
     put(P_W1, phase_shift_weights(X1, X2))
     inc = precession_terms(so_order, ss_order)
     keep_so = (inc["so_lo"], inc["so_nlo"], inc["so_nnlo"])
