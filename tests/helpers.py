@@ -16,6 +16,10 @@ REFERENCES = {
     "pycbc": "pycbc",
     "gwpy": "gwpy",
     "bilby": "bilby",
+    "sphinx": "sphinx",
+    "furo": "furo",
+    "myst_parser": "myst-parser",
+    "sphinx_gallery": "sphinx-gallery",
 }
 """The optional references of the test extra (pyproject.toml): module imported → the requirement that installs it.
 A test that needs one is skipped where it is missing (`reference`, `needs`, or ``pytest.importorskip``), except

@@ -321,3 +321,56 @@ def test_command_line_without_traceback(tmp_path, command):
     assert "Traceback" not in done.stderr
     assert done.stderr.startswith(f"pnrotor {command}: error: {path} is truncated or corrupt: HDF5 cannot open it (")
     assert done.stderr.count("\n") == 1
+
+
+def test_plot_and_inspect_show_a_run_with_its_modes_without_options(tmp_path, capsys, monkeypatch):
+    """The file of `pnrotor evolve --modes` (groups run and modes): `plot FILE` draws both (it said "is a batch
+    file; choose a run"), its time axes in M and in seconds (t_seconds = t M), the v panel with the GW frequency
+    f = v³/(π M); `inspect FILE` prints both groups."""
+    pytest.importorskip("matplotlib")
+    from matplotlib.figure import Figure
+
+    import pnrotor
+    run = pnrotor.evolve(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 100.0, sampling=1 / 4096)
+    with hdf5.batch(tmp_path / "w.h5") as groups:
+        groups.add("run", run)
+        groups.add("modes", pnrotor.modes(run, ell_max=3))
+    drawn = []
+    savefig = Figure.savefig
+    monkeypatch.setattr(Figure, "savefig", lambda self, *args, **kw: (drawn.append(self), savefig(self, *args, **kw))[1])
+    assert main(["plot", str(tmp_path / "w.h5")]) == 0
+    assert capsys.readouterr().out == f"wrote {tmp_path / 'w.png'}\n"
+    assert_sensible_png(tmp_path / "w.png", (1700, 1200))
+    axes = drawn[0].axes
+    titles = [a.get_title() for a in axes]
+    assert any(t.startswith("v(t)") for t in titles) and any(t.startswith("inertial modes") for t in titles)
+    assert any(t.startswith("polarizations") for t in titles)
+    M = run.t_seconds[-1] / run.t[-1]
+    timed = [a for a in axes if a.get_xlabel() == "t [M]"]
+    assert len(timed) == 5  # v, χ₁, χ₂, |h_lm|, h+ and hx
+    for a in timed:
+        seconds = [c for c in a.child_axes if c.get_xlabel() == "t [s]"]
+        assert len(seconds) == 1 and np.allclose(seconds[0].get_xlim(), np.array(a.get_xlim()) * M, rtol=1e-12)
+    v_panel = next(a for a in axes if a.get_title().startswith("v(t)"))
+    (f_axis,) = [c for c in v_panel.child_axes if c.get_ylabel() == "GW frequency [Hz]"]
+    assert np.allclose(f_axis.get_ylim(), np.array(v_panel.get_ylim()) ** 3 / (math.pi * M), rtol=1e-12)
+    assert np.isclose(run.f_gw[0], run.v[0] ** 3 / (math.pi * M), rtol=1e-12)  # the panel's f is the run's f_gw
+
+    out = inspect_output(capsys, tmp_path / "w.h5")
+    assert f"{tmp_path / 'w.h5'} run 'run': Evolution\n" in out and f"{tmp_path / 'w.h5'} run 'modes': Modes\n" in out
+    assert out.count("summary\n") == 2 and "12 modes, l = 2 ... 3" in out and "batch file" not in out
+
+
+def test_plot_prints_the_coarse_sampling_warning_on_one_line(tmp_path, capsys):
+    """The modes of a run sampled at its steps draw coarse polarizations: pnrotor plot says so in one line, as
+    pnrotor evolve does (it printed Python's warning with its source line)."""
+    pytest.importorskip("matplotlib")
+    import pnrotor
+    run = pnrotor.evolve(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 20.0)   # steps of > pi/2
+    with hdf5.batch(tmp_path / "w.h5") as groups:
+        groups.add("run", run)
+        groups.add("modes", pnrotor.modes(run, ell_max=2))
+    assert main(["plot", str(tmp_path / "w.h5")]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("pnrotor plot: warning: polarizations of a run sampled at sampling='steps' are coarse")
+    assert err.count("\n") == 1

@@ -32,9 +32,9 @@ Every angle here is therefore formed as the exact real number c + r t for the fl
 c, r, t (Dekker's error-free product and Knuth's error-free sum give it as an unevaluated sum of two
 doubles) and reduced modulo π/2 (Cody–Waite with 33-bit parts of π/2 while the quadrant count is
 below 2²⁰, else against a two-double π/2), so the remainder x ∈ [−π/4, π/4] has an absolute error of
-about one rounding at any t; cos x and sin x then follow from fdlibm's minimax polynomials (measured:
-within 1.1e-16 of mpmath for |t| ≤ 10⁷; the whole is ~1.5× faster than libm on a plainly rounded
-angle, which matters since ω is evaluated ~10⁶ times per run). The binary is thereby defined by its
+about one rounding at any t; cos x and sin x then follow from fdlibm's minimax polynomials (checked
+against mpmath, tests/test_analytic.py; and faster than libm on a plainly rounded angle, which matters
+since ω is evaluated ~10⁶ times per run). The binary is thereby defined by its
 float64 parameter values: Ω_orb is the double nearest 2π/1000, and the phase is that double times t,
 exactly.
 The integrated ω is evaluated the same way. It matters there too, though less: ω depends on the
@@ -260,8 +260,7 @@ class PrecessingNutatingBinary:
 
     Parameters (defaults are the paper's, eq:precession_constants): ``Omega_orb`` = 2π/1000, ``Omega_prec`` =
     2π/10000, ``alpha`` = π/8, ``alpha_dot`` = 2α/10⁵, ``nu`` = π/80, ``R0`` = e^{−3α x̂/10} (in the paper's
-    notation, where R₂ = e^{α x̂/2} tilts by α, a rotation by −3α/5 about x̂; until late 2026-11-27 the default was
-    half that rotation, e^{−3α x̂/20}, and so are the verification numbers measured before then), ``T`` = 10⁶
+    notation, where R₂ = e^{α x̂/2} tilts by α, a rotation by −3α/5 about x̂), ``T`` = 10⁶
     (the span of the paper's study: 1000 orbits, 100 precession cycles).  ``alpha_dot`` and ``R0`` default
     to these expressions in the given ``alpha``; ``R0`` may be any nonzero quaternion (w, x, y, z)
     and is normalized (one already unit to rounding is kept as given, since normalizing it again may

@@ -26,11 +26,10 @@ damped formulation reads λ = p[-2], μ = p[-1], so the parameters of ω come fi
 A right-hand side for :mod:`pnrotor.ode` composes an ω kernel with a derivative kernel. For the
 analytic binary these compositions are top-level, cached functions in :mod:`pnrotor.analytic`.
 For a user's ω, :func:`rhs_for_numba_omega` builds the composition as a closure, which numba compiles
-in every process (it cannot be cached across processes; ~0.4 s, measured, before the first
+in every process (it cannot be cached across processes: once per process, before the first
 integration with a given formulation and ω), and :func:`numba_omega_from_python` wraps a plain Python
 callable in a numba object-mode call so that the same integrator can drive it, at the price of a
-Python call per evaluation: measured on the binary's rotor with DOP853, 4.4–5.3 µs per evaluation
-against 0.17 µs on the cached path, i.e. ~30× slower.
+Python call per evaluation.
 
 Rotors returned by every formulation are unit and sign-continuous (:meth:`Formulation.rotors`).
 The rotor and unreset generator states are continuous, so their rotors are. The generator reset
@@ -39,7 +38,7 @@ its rotor only up to sign; for those formulations each sample's sign is chosen c
 previous sample advanced by the midpoint rule, exp(½ ω(t_mid) Δt) R_prev (first-order Magnus). Plain
 nearest-sign alignment fails once the frame turns by more than a half turn between samples, which
 Bulirsch–Stoer steps on the paper's binary do (up to ~660 time units, 2/3 of an orbit); the midpoint
-prediction stays within 50° of the truth for gaps up to 3 orbits there (measured), so it holds for
+prediction stays within 50° of the truth for gaps up to 3 orbits there, so it holds for
 every integrator output and for t_eval samples that resolve the rotation to that extent.
 """
 
@@ -149,7 +148,7 @@ def generator_reset(t, y, p):
 
     The paper's reset (eq:generator_reset) is n = 1, which is enough for |r| < 3π/2 at the end of a step.
     A step can end beyond that where ṙ stays bounded through |r| = π (ω ∥ r: ṙ = ω/2), and one
-    subtraction of π then left |r| = 5.2 (measured, benchmarks/stress_numerics.py); the nearest multiple
+    subtraction of π then left |r| = 5.2 (benchmarks/stress_numerics.py); the nearest multiple
     brings every step back to |r| ≤ π/2."""
     th = np.sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2])
     if th < 0.5 * np.pi:

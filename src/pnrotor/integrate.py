@@ -76,8 +76,7 @@ def integrate_angular_velocity(omega, t_span, R0, formulation="rotor", method="D
           right-hand side composing it with the formulation is compiled once per process (~0.4 s),
           then runs as fast as the cached path;
         * a plain Python callable ``omega(t)`` returning three floats: called from the compiled
-          integrator through numba's object mode, 4–5 µs per evaluation instead of ~0.17 µs, i.e.
-          ~30× slower than the cached path on the paper's problem (measured).
+          integrator through numba's object mode, many times slower than the cached path.
 
         For the generator and vector formulations, a user's ω is also called from Python once per
         output interval, to make the rotor signs continuous (see :mod:`pnrotor.formulations`).

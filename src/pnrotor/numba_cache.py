@@ -10,9 +10,7 @@ function at a time in a process, and the biggest units take ~12 s each here: on 
 modes kernels (``'modes'``; ``'waves'`` for a uniformly sampled run, whose modes and polarizations are computed as
 they are written), each in a process of its own while this one compiles the rest of its run
 (parameters, right-hand side, events); their first use waits for that process (:func:`wait_for_aside`) and loads
-what it cached (``pnrotor.ode.common.entry_point``, ``pnrotor.waveform.amplitudes.modes_in_frame``).  A cold
-``pnrotor evolve --modes`` (30 + 10 precessing) took 26-32 s with the modes kernels compiled after the run, in
-this process (measured; the figures with them aside are in the README).
+what it cached (``pnrotor.ode.common.entry_point``, ``pnrotor.waveform.amplitudes.modes_in_frame``).
 """
 
 import glob

@@ -136,7 +136,7 @@ def qlog(q):
     |r| = atan2(|vector part|, scalar part), accurate near 0 and π. For a vector part exactly zero and
     a negative scalar part (the rotor −1), the axis is arbitrary and (π, 0, 0) is returned.  The vector
     part's squared norm must be a normal float: |vector part| in (1e-150, 1e150) (beyond, it overflows or
-    underflows and the result is wrong; a review of 2026-11-27 found (0, 0, 0) for a norm of 1e155).
+    underflows and the result is wrong).
     """
     vn = np.sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     out = np.zeros(3)
@@ -256,8 +256,8 @@ def _put(r, out):
 def _gufunc(signatures, layout):
     """``guvectorize(signatures, layout, cache=True)``, built on the first call rather than at import: numba
     compiles (or loads from its cache) a gufunc with explicit signatures when it is decorated, and the
-    twelve here cost ~5–9 s on a cold cache and ~0.4 s warm for every process that imports this module,
-    where the PN runs need only the kernels above (measured)."""
+    twelve here would be compiled or loaded by every process that imports this module, where the PN runs need
+    only the kernels above."""
     def wrap(kernel):
         built = None
 

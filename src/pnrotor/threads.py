@@ -148,11 +148,9 @@ def run(kernel, ranges, stop=None):
 
 
 PART_SECONDS = 1e-3
-"""Work per part at least for :func:`run_timed`: handing a part to a worker costs ~50 µs of wall and CPU time when
-the calls follow each other, ~200–250 µs (300–430 µs at the 90th percentile) after 2 ms of other work or sleep (the
-worker's core idle meanwhile), on the shared 2-core virtual machine pnrotor is measured on at load 2 (a kernel of
-nothing, 300 calls each; the time of a small waveform between two of LAL's): a part of 1 ms or more gains about its
-own time where the other core is free and loses at most ~0.4 ms where it is not."""
+"""Work per part at least for :func:`run_timed`: handing a part to a worker costs tens of µs when the calls
+follow each other and several times that after its core idled, so a part of 1 ms or more gains about its own time
+where the other core is free and loses little where it is not."""
 
 TIMED_SAMPLES = 2048
 """Samples that :func:`run_timed` computes first on the calling thread, timed: a small waveform's kernel call (numba's

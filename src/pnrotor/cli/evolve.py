@@ -163,7 +163,7 @@ def _warn_if_cold(here=True, population=False, modes=False, streamed=False):
     kernel = "waves" if streamed else "modes"   # a uniform run's waves are computed as they are written
     waves = modes and numba_cache.is_cold("stream._waves" if streamed else "amplitudes._sum", "waveform")
     if core or waves or population and numba_cache.is_cold("many._integrate_all", "pn"):
-        # measured on a 2-core VM in its fast and slow phases (the README's cold start)
+        # on a 2-core VM in its fast and slow phases (benchmarks/bench_cold_start.py)
         wait = "~35-45" if population else "~20-35" if waves else "~10-25"
         print(f"pnrotor: compiling its numba kernels for this machine, once ({wait} s); later runs load them in ~1-2 s",
               file=sys.stderr, flush=True)

@@ -6,7 +6,7 @@ then a short summary — for post-Newtonian runs the duration in M and s, the nu
 the first and final v and the termination; for waveform modes which modes, their units, the span and the
 largest amplitudes; for frame histories the formulation, method, tolerances, status and integrator work; for
 a population file (`PopulationTable`) the count of each termination.  For a batch file: its runs, or one run
-with ``--group``.
+with ``--group``; for a file of ``pnrotor evolve --modes`` (groups ``run``, ``modes``): every group.
 
 numpy and h5py are imported only when the command runs, so that the CLI starts quickly.
 """
@@ -28,6 +28,10 @@ def add_parser(subparsers):
 def run(args):
     from pnrotor import hdf5
 
+    groups = evolve_groups(args.file, args.group)
+    if len(groups) > 1:
+        print("\n\n".join("\n".join(describe(args.file, group)) for group in groups))
+        return 0
     runs = hdf5.list_runs(args.file)
     if args.group is None and runs != ["/"]:
         print(f"{args.file}: batch file with {len(runs)} run{'s' * (len(runs) != 1)}")
@@ -38,6 +42,23 @@ def run(args):
         return 0
     print("\n".join(describe(args.file, args.group)))
     return 0
+
+
+EVOLVE_GROUPS = ("run", "modes", "polarizations")
+"""The groups of a file of ``pnrotor evolve --modes`` or ``--polarizations``, in the order they are drawn."""
+
+
+def evolve_groups(path, group):
+    """The groups to show of `path`: `group` if given; all of them for a file of ``pnrotor evolve --modes`` (a run
+    and its modes or polarizations); else the file's one run (None: `hdf5.read` names a batch file's runs)."""
+    from pnrotor import hdf5
+
+    if group is not None:
+        return [group]
+    runs = hdf5.list_runs(path)
+    if "run" in runs and set(runs) <= set(EVOLVE_GROUPS):
+        return [name for name in EVOLVE_GROUPS if name in runs]
+    return [None]
 
 
 def describe(path, group=None):

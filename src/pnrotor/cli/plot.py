@@ -8,16 +8,21 @@ nutating binary (those of ``pnrotor verify -o``, whose inputs describe it:
 `PrecessingNutatingBinary.from_inputs`) add the frame error δ(t) of eq:error_norm against its exact
 rotor, on a log scale, with its maximum. Waveform modes (``pnrotor evolve --modes``, group ``modes``):
 |h_ℓm|(t) of the modes m ≥ 0 that reach 1e-3 of max |h₂₂|, and h₊, h× seen from ``--inclination`` and
-``--phi-ref``. Lines of more than `MAX_POINTS` samples are drawn from every k-th sample (δ: the largest
-of each k samples), and the panel says so.
+``--phi-ref``; stored polarizations (``--polarizations``): h₊, h× against t in seconds. A file of
+``pnrotor evolve --modes`` (groups ``run``, ``modes``) is drawn whole without ``--group``. Times are in M with
+seconds on a second axis, and v(t) has the GW frequency f = v³/(π M) beside it. Lines of more than
+`MAX_POINTS` samples are drawn from every k-th sample (δ: the largest of each k samples), and the panel says so.
 
 numpy, h5py, matplotlib and pnrotor's numba code are imported only when the command runs, so that the CLI
 starts quickly.
 """
 
+import sys
+import warnings
 from pathlib import Path
 
 from pnrotor.cli import UsageError
+from pnrotor.cli.inspect import evolve_groups
 from pnrotor.files import replaced_on_success
 
 MAX_POINTS = 50_000
@@ -52,29 +57,62 @@ def run(args):
         raise FileNotFoundError(f"folder {output.parent} does not exist (writing {output})")
     from pnrotor import hdf5
 
-    result = hdf5.read(args.file, args.group)
-    kind = type(result).__name__
-    if kind == "PopulationTable":
-        raise UsageError(f"{args.file} holds the final states of unrelated binaries (a PopulationTable): nothing to "
-                         "draw against time; `pnrotor inspect` or h5py reads it")
-    if result.t.size < 2:
-        raise UsageError(f"{args.file} holds {result.t.size} sample{'s' * (result.t.size != 1)} of its {kind} (sampling "
-                         "'final'?): nothing to draw against time; `pnrotor inspect` prints it")
-    post_newtonian = all(hasattr(result, name) for name in ("ell_hat", "v", "chi1", "chi2"))
-    binary = None if post_newtonian or kind == "Modes" else _binary(result)
-    figure = Figure(figsize=(12, 8.5 if binary is None else 12.5), layout="constrained")
+    results = [(group, hdf5.read(args.file, group)) for group in evolve_groups(args.file, args.group)]
+    for group, result in results:
+        _check_drawable(args.file, result)
+    heights = [_height(result) for _, result in results]
+    figure = Figure(figsize=(12, sum(heights)), layout="constrained")
     title = args.file if args.group in (None, "/") else f"{args.file} run {args.group!r}"
-    figure.suptitle(f"{title}: {kind}")
-    if kind == "Modes":
-        _modes(figure, result, args.inclination, args.phi_ref)
-    elif post_newtonian:
-        _post_newtonian(figure, result)
-    else:
-        _frame_history(figure, result, binary)
+    figure.suptitle(f"{title}: " + ", ".join(f"{type(result).__name__}" + (f" ({group})" if len(results) > 1 else "")
+                                             for group, result in results))
+    panels = figure.subfigures(len(results), 1, height_ratios=heights) if len(results) > 1 else [figure]
+    with warnings.catch_warnings(record=True) as caught:   # each on one line, as pnrotor evolve prints them
+        warnings.simplefilter("always")
+        for panel, (_, result) in zip(panels, results):
+            _draw(panel, result, args)
+    for warning in caught:
+        print(f"pnrotor plot: warning: {warning.message}", file=sys.stderr)
     with replaced_on_success(output) as temporary:
         figure.savefig(temporary, dpi=100)
     print(f"wrote {output}")
     return 0
+
+
+def _check_drawable(file, result):
+    kind = type(result).__name__
+    if kind == "PopulationTable":
+        raise UsageError(f"{file} holds the final states of unrelated binaries (a PopulationTable): nothing to "
+                         "draw against time; `pnrotor inspect` or h5py reads it")
+    n = result.t_seconds.size if kind == "Polarizations" else result.t.size
+    if n < 2:
+        raise UsageError(f"{file} holds {n} sample{'s' * (n != 1)} of its {kind} (sampling "
+                         "'final'?): nothing to draw against time; `pnrotor inspect` prints it")
+
+
+def _post_newtonian_run(result):
+    return all(hasattr(result, name) for name in ("ell_hat", "v", "chi1", "chi2"))
+
+
+def _height(result):
+    """The figure height in inches for `result`'s panels (the paper's binary adds a row for δ(t))."""
+    kind = type(result).__name__
+    if kind == "Polarizations":
+        return 4.5
+    if kind == "Modes" or _post_newtonian_run(result) or _binary(result) is None:
+        return 8.5
+    return 12.5
+
+
+def _draw(figure, result, args):
+    kind = type(result).__name__
+    if kind == "Modes":
+        _modes(figure, result, args.inclination, args.phi_ref)
+    elif kind == "Polarizations":
+        _polarizations(figure.add_subplot(1, 1, 1), result)
+    elif _post_newtonian_run(result):
+        _post_newtonian(figure, result)
+    else:
+        _frame_history(figure, result, _binary(result))
 
 
 def _default_output(file, group):
@@ -87,12 +125,20 @@ def _post_newtonian(figure, result):
     _sphere(figure.add_subplot(2, 2, 1, projection="3d"), result.ell_hat[::every], "ℓ̂ (orbital plane normal)", every)
     v = figure.add_subplot(2, 2, 2)
     v.plot(t, result.v[::every])
-    v.set(xlabel="t [M]", ylabel="v = (M Ω)^(1/3)", title="v(t)")
+    v.set(ylabel="v = (M Ω)^(1/3)", title="v(t) and the GW frequency f = v³/(π M)")
+    M = _seconds_per_M(result)
+    _time_axes(v, M)
+    if M is not None:
+        import numpy as np
+
+        v.secondary_yaxis("right", functions=(lambda x: x ** 3 / (np.pi * M), lambda f: np.cbrt(np.pi * M * f))
+                          ).set_ylabel("GW frequency [Hz]")
     for position, name, symbol in ((3, "chi1", "χ₁"), (4, "chi2", "χ₂")):
         axes = figure.add_subplot(2, 2, position)
         for component, label in enumerate("xyz"):
             axes.plot(t, getattr(result, name)[::every, component], label=f"{symbol}{label}")
-        axes.set(xlabel="t [M]", ylabel=symbol, title=f"{symbol} components (inertial frame)")
+        axes.set(ylabel=symbol, title=f"{symbol} components (inertial frame)")
+        _time_axes(axes, _seconds_per_M(result))
         axes.legend(loc="best")
 
 
@@ -110,7 +156,8 @@ def _modes(figure, modes, inclination, phi_ref):
         magnitude = np.abs(inertial.mode(ell, m))
         if m >= 0 and magnitude.max() > floor:
             amplitudes.semilogy(t, magnitude[::every], lw=0.8, label=f"({ell},{m})")
-    amplitudes.set(xlabel="t [M]", ylabel=f"|h_lm| [{unit}]",
+    _time_axes(amplitudes, _seconds_per_M(modes))
+    amplitudes.set(ylabel=f"|h_lm| [{unit}]",
                    title=f"inertial modes, m ≥ 0, those above 1e-3 of max |h22| ({modes.frame} frame stored)"
                    f"{_sampling(every)}")
     amplitudes.legend(loc="upper left", ncol=6, fontsize="small")
@@ -118,9 +165,35 @@ def _modes(figure, modes, inclination, phi_ref):
     waves = figure.add_subplot(2, 1, 2)
     waves.plot(t, plus[::every], lw=0.6, label="h+")
     waves.plot(t, cross[::every], lw=0.6, label="hx")
-    waves.set(xlabel="t [M]", ylabel=unit, title=f"polarizations, inclination {inclination:g} rad, "
+    _time_axes(waves, _seconds_per_M(modes))
+    waves.set(ylabel=unit, title=f"polarizations, inclination {inclination:g} rad, "
               f"phi_ref {phi_ref:g} rad{_sampling(every)}")
     waves.legend(loc="upper left")
+
+
+def _polarizations(axes, result):
+    """h₊ and h× (strain) against t in seconds."""
+    every = _stride(result.t_seconds.size)
+    t = result.t_seconds[::every]
+    axes.plot(t, result.h_plus[::every], lw=0.6, label="h+")
+    axes.plot(t, result.h_cross[::every], lw=0.6, label="hx")
+    axes.set(xlabel="t [s]", ylabel=f"strain at {result.distance_Mpc:g} Mpc",
+             title=f"polarizations, inclination {result.inclination:g} rad, phi_ref {result.phi_ref:g} rad"
+             f"{_sampling(every)}")
+    axes.legend(loc="upper left")
+
+
+def _seconds_per_M(result):
+    """The total mass M in seconds (G M / c³) of a run or its modes, or None if its inputs do not say."""
+    inputs = getattr(result, "inputs", None)
+    return inputs.get("M_seconds") if isinstance(inputs, dict) else None
+
+
+def _time_axes(axes, M):
+    """t in M on the x axis, and in seconds (t_seconds = t M) on a second x axis above it when M is known."""
+    axes.set_xlabel("t [M]")
+    if M is not None:
+        axes.secondary_xaxis("top", functions=(lambda t: t * M, lambda s: s / M)).set_xlabel("t [s]")
 
 
 def _binary(result):

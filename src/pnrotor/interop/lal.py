@@ -75,7 +75,7 @@ def sph_harm_time_series(modes):
     ``COMPLEX16TimeSeries`` per (ℓ, m), epoch the first sample's time (t = 0 at f_ref), Δt the sampling.
 
     LAL's Python binding of ``SphHarmTimeSeriesAddMode`` returns the list it was given in a second owning
-    wrapper (freeing both crashed the interpreter, measured); the given one is disowned."""
+    wrapper (freeing both crashes the interpreter); the given one is disowned."""
     if modes.distance_Mpc is None:
         raise ValueError("LAL's modes are strain: compute the modes with a distance (pnrotor.modes(run, "
                          "distance=...))")

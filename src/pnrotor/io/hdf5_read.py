@@ -104,8 +104,8 @@ def strings_crc(values):
     (``/inputs/spin_content``), in sorted order, joined by NUL.  HDF5 keeps a variable-length string in its
     global heap, which has no checksum (the object headers of the 1.10 format and the Fletcher-32 of the
     data cover the rest): without this, 4 of 500 bit flips in a small file read back as a wrong
-    ``termination`` or input (benchmarks/faults.py).  From the values, not the file: reading the attributes
-    again took 3.9 ms per write of a typical run (measured)."""
+    ``termination`` or input (benchmarks/faults.py).  From the values, not the file (reading the
+    attributes again would cost more than the write)."""
     items = []
 
     def walk(group, prefix):

@@ -43,7 +43,7 @@ __all__ = [
 
 
 def __getattr__(name):
-    # Bulirsch–Stoer on first use: importing its module compiles its core (~3 s on a cold cache, measured),
+    # Bulirsch–Stoer on first use: importing its module compiles its core,
     # which a PN run does not need
     if name == "bulirsch_stoer":
         from .bulirsch_stoer import bulirsch_stoer

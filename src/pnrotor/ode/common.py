@@ -22,10 +22,8 @@ A solver module (:mod:`pnrotor.ode.dop853`, :mod:`pnrotor.ode.bulirsch_stoer`) p
 Function types: a core takes the right-hand side and hooks by the addresses of their compiled code (one int64
 array, ``FUNCTIONS_LAYOUT``), checked against the explicit signatures below before the call, and calls them inside
 as first-class ``numba.types.FunctionType`` values (:data:`rhs_function`, …); numba caches such a driver across
-processes (a driver taking a dispatcher or closure is recompiled in every process).  An indirect call of a no-op
-right-hand side with its three array arguments measured ~6 ns here.  Calling :func:`~pnrotor.ode.dop853.dop853`
-has a fixed cost of ~0.05 ms (argument checks; a short oscillator run 48-52 µs with its right-hand side by
-address, 57-65 µs as a dispatcher, measured), see ``benchmarks/bench_ode.py``.
+processes (a driver taking a dispatcher or closure is recompiled in every process).  Calling
+:func:`~pnrotor.ode.dop853.dop853` has a fixed cost (argument checks), which ``benchmarks/bench_ode.py`` measures.
 """
 
 import math
@@ -98,8 +96,7 @@ def default_hook(name):
 # The cores take their functions as one int64 array of addresses, FUNCTIONS_LAYOUT, and turn each pair into
 # a first-class function inside (`_function_of`).  Declared as FunctionType arguments instead, every call
 # of a core from Python unboxed each function through numba's Python helpers (a module import, two
-# unpickled signatures and two Python calls per function): ~17-21 µs per call for three functions, against
-# ~0.7 µs for the address array (measured with a one-evaluation driver of either form).
+# unpickled signatures and two Python calls per function), many times the cost of the address array.
 
 
 def _function_of(sig):
@@ -409,7 +406,7 @@ def _validate_t_eval(t_eval, t0, t_end):
 
 _CHECKED = weakref.WeakKeyDictionary()
 """dispatcher -> {argument name: (its overload for that signature, its addresses)}: looking the addresses up costs
-~50 µs, a call of :func:`_jit_function` that finds them 2.6 µs (measured); a recompiled dispatcher has a new overload."""
+more than a call of :func:`_jit_function` that finds them here; a recompiled dispatcher has a new overload."""
 
 
 def _jit_function(f, sig, name):
@@ -432,7 +429,7 @@ def _jit_function(f, sig, name):
         raise TypeError(f"{name} must be an @njit function, not a @cfunc (an exception raised inside a @cfunc cannot "
                         f"reach the caller); use @njit({_sig_label(sig)}, cache=True)")
     if isinstance(f, _FunctionAddress):
-        # the identity test spares comparing signatures (~0.9 µs, measured) in the usual case
+        # the identity test spares comparing signatures in the usual case
         if f._sig is not sig and f._sig != sig:
             raise TypeError(f"{name} must have the signature {sig}; got a function of signature {f._sig}")
         return f

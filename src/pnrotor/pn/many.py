@@ -234,9 +234,8 @@ def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, dir
     directions[k], the run's R₀, ℓ̂, χ₁, χ₂ at f_ref, output row rows[k], nearer targets near_v[k] in rows
     near_r[k]) integrated by :func:`_integrate_all` into the rows of ``out`` and ``counts`` → the seconds its
     compiled loops took.  The loop runs on :func:`pnrotor.threads.run`'s threads (a ``nogil`` kernel), each taking
-    the next :data:`_HALVES` halves as it is free: numba's parallel loop (``prange``) took as long to run and ~12 s
-    longer to compile cold (measured: 4,000 binaries, six alternating pairs of processes; a first call with the core
-    cached 30.4-31.8 s against 17.7-19.8 s), and an even split left one thread idle at the end, ~4% of the loop."""
+    the next :data:`_HALVES` halves as it is free: numba's parallel loop (``prange``) ran no faster and took
+    longer to compile cold, and an even split left one thread idle at the end."""
     atol_a, rtol_a = _tolerances(Y0.shape[1], atol, rtol)
     args = (function_addresses(rhs, default_hook("after_step"), events), Y0, P, t_end, directions,
             atol_a, rtol_a, max_steps, *_CONTROLLER, mode, R0, ell, chi1, chi2, rows, near_v, near_r, out.t, out.v,
@@ -267,8 +266,7 @@ def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, dir
 @contextmanager
 def _collector_paused():
     """Python's cyclic garbage collector paused (restored after): the loop over binaries allocates ~10 objects
-    per binary and frees none, so the collections it triggers walk ever more of them, and find no cycle
-    (measured: ~10 µs per binary of ~50 µs of Python, at 4,000 binaries)."""
+    per binary and frees none, so the collections it triggers walk ever more of them, and find no cycle."""
     enabled = gc.isenabled()
     gc.disable()
     try:
@@ -440,12 +438,14 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
         Spin-induced quadrupole constants.
     lambda1, lambda2 : array_like (N,) or scalar
         Dimensionless tidal deformabilities Λᵢ (0 for black holes).
-    approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, rotor, precession_phase_shift, \
-integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
-        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries (with ``horizon_absorption`` every binary
-        is on the precessing state, its spins at the state's frequency changed by what the horizons absorbed; the
-        masses it leaves are not kept).
+    approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
+        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
+    rotor, precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
+        The same (with ``horizon_absorption`` every binary is on the precessing state, its spins at the state's
+        frequency changed by what the horizons absorbed; the masses it leaves are not kept).
 
+    Notes
+    -----
     The number of threads is :func:`pnrotor.threads.thread_count`'s (numba's: ``numba.set_num_threads``,
     ``NUMBA_NUM_THREADS``; at most :func:`pnrotor.threads.limit`'s).  Invalid shared
     options or array shapes raise a ValueError; an invalid binary does not (module docstring).

@@ -112,8 +112,8 @@ def _half_angle_cos_sin(ph, cs, m):
 
     x = ph/2 is reduced to r = x − n π/2, |r| ≤ π/4, with π/2 in three parts (Cody and Waite), and cos r, sin r
     are fdlibm's polynomials; the quadrant n mod 4 picks the signs and the swap by multiplying with 0 and ±1,
-    which is exact.  With no call and no branch the loop is vectorized: ~2 ns per sample against ~13 for
-    libm's ``sincos`` (measured).  A block with some |x| beyond :data:`_REDUCTION_LIMIT` (Φ > 1.6e6 rad,
+    which is exact.  With no call and no branch the loop is vectorized, which a call of
+    libm's ``sincos`` prevents.  A block with some |x| beyond :data:`_REDUCTION_LIMIT` (Φ > 1.6e6 rad,
     ~260,000 orbits) takes libm's."""
     far = False
     for b in range(m):
@@ -284,8 +284,7 @@ def _allocate_history(n, mode=MODE_COPRECESSING):
 
 def _constant_rows(hist, mode, fixed, n):
     """The history with an aligned run's χ₁, χ₂ and ℓ̂ as read-only (n, 3) views of their one value: no memory per
-    sample (writing and first touching those rows made evolve of aligned runs at Δt = 1/4096 s 18-40% slower,
-    measured)."""
+    sample."""
     if mode != MODE_ALIGNED:
         return hist
     v, Phi, _, _, R, _ = hist
@@ -294,8 +293,8 @@ def _constant_rows(hist, mode, fixed, n):
 
 
 def _repeated(x, n):
-    """The contiguous 3-vector x as a read-only (n, 3) view of it, repeated: what ``np.broadcast_to`` gives, in a
-    third of its ~3.4 µs (measured)."""
+    """The contiguous 3-vector x as a read-only (n, 3) view of it, repeated: what ``np.broadcast_to`` gives, at less
+    cost."""
     view = np.ndarray((n, 3), np.float64, x, 0, (0, 8))
     view.flags.writeable = False
     return view
@@ -310,8 +309,7 @@ def compile_output_kernel(s):
     """Compile :func:`_fill_history` (or load it from numba's cache) now, once per process, for the argument
     types :func:`sample` gives it.  :func:`pnrotor.pn.evolve.evolve` calls this before it integrates, so that on
     a cold cache it is compiled while another process compiles the DOP853 core (:mod:`pnrotor.numba_cache`),
-    not after it: 0.8 s of the CLI's cold start (measured); and so is :func:`_phase_roots` for a per-orbit run
-    (0.6 s)."""
+    not after it; and so is :func:`_phase_roots` for a per-orbit run."""
     if not _fill_history.overloads:
         _fill_history(output_mode(s.use_aligned, s.rotor), _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, _NO_Y,
                       *_fixed(s), 0, *_allocate_history(0))

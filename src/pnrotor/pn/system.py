@@ -3,12 +3,12 @@ r"""State layout, parameter vector and numba right-hand sides of the post-Newton
 Two specializations, each a top-level ``@njit(cache=True)`` function that :func:`pnrotor.ode.by_address`
 compiles for ``RHS_SIG`` (or ``EVENTS_SIG``) when a run first needs it, so the DOP853 driver (which takes
 first-class functions of that signature) is compiled once per machine and cached, and a run compiles
-only the specialization it uses (on a cold cache, each costs 0.2–1.8 s, measured).  The
+only the specialization it uses.  The
 right-hand sides and event functions are compiled with ``error_model='numpy'``: they cannot raise (a
 division by zero gives inf or nan, which the integrator reports as ``'nonfinite'``), so
 :func:`~pnrotor.pn.evolve.evolve` passes them by address (:func:`pnrotor.ode.by_address`).  They are
 also compiled with ``fastmath={'contract'}`` and nothing else of fastmath: a product and a sum may fuse
-into one FMA (one rounding instead of two, where the CPU has FMA; 10–15% faster, measured), nothing is
+into one FMA (one rounding instead of two, where the CPU has FMA; faster), nothing is
 reordered, and inf and nan propagate as without it.
 
 * :func:`rhs_precessing` — state ``y = [v, χ₁(3), χ₂(3), R(4), Φ]`` (12 components; with horizon absorption 14,
@@ -79,8 +79,7 @@ Events (all terminal), filled by :func:`events_precessing` / :func:`events_align
      approaches v* only exponentially, and the phase gained before round-off ends the run depends on atol
      (tens of radians).  LALSuite's SpinTaylor stops on this condition (d²ω/dt² ≤ 0 between steps, its
      code 1026, with ω = v³/M the variable it integrates): for aligned spins ω̈ = ω̇ ∂ω̇/∂v / (3v²/M) has
-     the sign of ∂(v²v̇)/∂v, so the two tests agree (until 2026-11-27 this was ∂v̇/∂v, which ends earlier:
-     2.04 rad of orbital phase before LAL on a 1PN 20 + 8 M☉ run); with precessing spins ours ignores the
+     the sign of ∂(v²v̇)/∂v, so the two tests agree; with precessing spins ours ignores the
      precession's slow modulation of v̇ through the spin invariants.
 """
 
@@ -163,9 +162,8 @@ DEN_EPS = 1e-3
 def spin_tolerance(atol, rtol):
     """How far |χᵢ|² may exceed 1 before events 3/4 end a run: 1000 (atol + rtol), at least SPIN_TOL and at
     most 1e-3 (a drift of that size is a failed integration whatever was asked).  The
-    equations conserve |χᵢ|; the integration lets it drift by a few atol (measured: 4–12 atol with the
-    co-precessing rotor, 0.3–0.6 with the orbital one, maximal spins 30 + 10 M☉ from 10 Hz to the end, atol
-    1e-12 … 1e-6), which with a fixed 1e-10 ended such runs as 'spin_magnitude' from atol 1e-10 up (at
+    equations conserve |χᵢ|; the integration lets it drift by a few atol, which with a fixed 1e-10 ended such runs
+    as 'spin_magnitude' from atol 1e-10 up (at
     1e-6, at 21 Hz instead of 197): only a real failure ends a run here, not the requested tolerance."""
     return min(1e-3, max(SPIN_TOL, 1e3 * (atol + rtol)))
 
@@ -532,8 +530,7 @@ def _add_tides(E_raw, F_raw, kmax, approx, N, D, Ep):
     spin terms below v³ and no logarithms below v⁶), so Q_pp and Ê′_pp are taken at 1PN, without spins: LALSuite's
     fixed SpinTaylorT4 and T5 tidal coefficients (``XLALSimInspiralTaylorT4wdot_1{0,2}PNTidalCoeff``,
     ``XLALSimInspiralTaylorT2dtdv_1{0,2}PNTidalCoeff``), which tests/test_pn_tides.py checks these against.
-    In numpy on the coefficients, not compiled (series.divide's general products compiled into _vdot_series added
-    ~40 s to a cold start, these loops compiled ~4 s, measured under load; in numpy they add nothing to it)."""
+    In numpy on the coefficients, not compiled: they add nothing to a cold start."""
     top = min(int(kmax[3]), N.shape[-3] - 1)
     powers = range(TIDAL_K, top + 1)
     e_t = {k: 0.5 * (k + 2) * E_raw[..., k, 0, 0] for k in powers}   # Ê′ of the tidal energy terms
@@ -600,7 +597,7 @@ def earlier_end(c_addr, jit_addr, y0, p):
     refused).  Found on a geometric grid from 0.05 to v₀ (:data:`_SCAN_STEP`: a band of failing events narrower
     than 4.6% in v can be missed, as :func:`inspiral_end`'s finer grid can miss narrower ones) and refined by
     bisection to 1e-12.  The events are the run's own compiled function, called by address: one small kernel for
-    every system (0.3–0.5 s to compile; 2.6–3.5 µs per run at v₀ = 0.23 and 0.5, measured)."""
+    every system."""
     v0 = y0[Y_V]
     if not v0 > _SCAN_FROM:
         return 0.0
@@ -705,9 +702,8 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     """Everything :func:`make_parameters` (and :func:`start_rows`) builds that does not depend on the spins or
     v_end, for n binaries that share the options and differ in X1, κ₁, κ₂, Λ₁, Λ₂ (arrays (n,), or floats for one
     binary): (heads (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
-    :func:`vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
-    binary, against ~65 µs of Python floats for one, measured; 85 µs before the imports left the function and
-    :func:`pnrotor.pn.series.shape_of` replaced np.shape).  The numbers are built with the binaries
+    :func:`vdot_series`).  Arrays take one pass of numpy over the binaries
+    (``evolve_many``).  The numbers are built with the binaries
     last (p[j] = x is then a row) and turned binaries-first at the end (only the head of p: with all of it
     transposed they took ~10 µs per binary).  Binary i gets bitwise the numbers of a
     call with its floats: the coefficient functions are elementwise and use only +, −, ×, / (powers are

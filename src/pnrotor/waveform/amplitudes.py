@@ -150,9 +150,7 @@ def _real_terms(nu, delta, ell_max, order2, spins, constants, tides=NO_TIDES, me
     passes of the rotation, which skip the columns m' where H_ℓ,±m' has no term
     (:func:`pnrotor.waveform.wigner.rotation_plan`).  Sums that vanish (e.g. the odd-m terms of equal masses)
     are no terms.  Cached: a run's modes computed again (another ℓ_max, frame or distance) skip these;
-    what depends only on the options is :func:`_layout`'s (measured, A/B in alternating processes on a loaded
-    machine: ℓ ≤ 4 at 1.5PN 67-69 µs, ℓ ≤ 8 at 3.5PN 99-103 µs, against 105-192 and 212-385 µs with every term
-    summed into a dict, and every ℓ ≤ 8 of the sources evaluated for any ℓ_max)."""
+    what depends only on the options is :func:`_layout`'s."""
     n_pow = 2 * ell_max + 1
     kept, into, (ell, target, k, q), spin_q = _layout(ell_max, order2, spins, constants is not None, tides[2], memory)
     c = np.array(_source_values(nu, delta, ell_max, spins, tides, memory), dtype=np.complex128)[kept]

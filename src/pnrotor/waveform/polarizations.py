@@ -1,6 +1,6 @@
 r"""Spin-weighted spherical harmonics and the polarizations h₊, h× of a set of modes.
 
-Convention (LALSuite's, ``XLALSpinWeightedSphericalHarmonic``; checked against it in the tests):
+Convention (LALSuite's, ``XLALSpinWeightedSphericalHarmonic``; checked against it in the tests)::
 
     ₛY_ℓm(θ, φ) = (−1)^m √[(ℓ+m)!(ℓ−m)!(2ℓ+1) / (4π (ℓ+s)!(ℓ−s)!)]
                   × Σ_r C(ℓ−s, r) C(ℓ+s, r+s−m) (−1)^(ℓ−r−s) sin^(2ℓ−k)(θ/2) cos^k(θ/2) e^{imφ},

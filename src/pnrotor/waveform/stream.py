@@ -26,15 +26,15 @@ the inertial modes stored, or, for h₊ − i h× = Σ_ℓm h_ℓm ₋₂Y_ℓm(
 the line of sight, where the sum over m is its m = 2 term alone (:func:`_line_of_sight`): one mode per ℓ of the
 rotation's second product, summed at once, so a polarizations call forms neither a history nor a mode array.  A run
 whose rotors turn about ẑ alone (aligned spins in the default frame) has no rotation to make: its inertial modes
-H_ℓm e^{−imΦ} are summed with their ₋₂Y_ℓm as they are formed (:func:`_harmonics`; 30–45% less time a sample than
-the rotation, ℓ ≤ 2 to 8, measured).
+H_ℓm e^{−imΦ} are summed with their ₋₂Y_ℓm as they are formed (:func:`_harmonics`; less time a sample than
+the rotation).
 The history of :meth:`Stream.evolution` is ``_fill_history`` itself, a block at a time.
 
 The numbers are those of ``evolve(…, sampling=Δt)`` → ``modes(run, …)`` → ``Modes.polarizations(ι, φ_ref)``: the
 history and the modes bitwise (the same kernels on the same samples in the same blocks of 256: the parts and blocks
 start at multiples of 256), the polarizations to rounding (another rotation of the same modes; ≤ 2e-15 of max|h| on
 the tests' BBH, NSBH and BNS, which allow 1e-13; summing all the inertial modes, as ``Modes.polarizations`` does,
-would give them bitwise at a higher cost), those of a run in frame "z" bitwise (that sum, term by term, measured on
+would give them bitwise at a higher cost), those of a run in frame "z" bitwise (that sum, term by term, tested on
 aligned and nonspinning BBH and BNS).  ``pnrotor.threads`` splits the samples, so the thread count does not change
 any of them.  The kernel holds
 ``_fill_history`` (:mod:`pnrotor.pn.sampling`), the block functions of :mod:`pnrotor.waveform.amplitudes` and
@@ -289,8 +289,8 @@ _HUGE_PAGES_FROM = 1 << 22
 
 def _empty(shape, dtype=np.float64):
     """A new C-contiguous array for the kernel to fill; from :data:`_HUGE_PAGES_FROM` bytes in anonymous memory of the
-    system's base pages (``mmap``) rather than numpy's: numpy asks for transparent huge pages there, and on the
-    virtual machines pnrotor is measured on their first touch costs several times the system time of base pages
+    system's base pages (``mmap``) rather than numpy's: numpy asks for transparent huge pages there, and on some
+    virtual machines their first touch costs several times the system time of base pages
     (benchmarks/bench_long.py; LAL's arrays, from malloc, get base pages).  Freed with the array."""
     count = int(np.prod(shape))
     size = count * np.dtype(dtype).itemsize

@@ -99,9 +99,8 @@ def rotation_plan(columns):
     ``(first, rows, coefs)``, the passes of ℓ's first product (over m') ``first[2ℓ] : first[2ℓ+1]`` and of its
     second (over m'') ``first[2ℓ+1] : first[2ℓ+2]``; pass k adds to the rows (rows[k, 0], rows[k, 1]) = (ℓ + μ,
     ℓ − μ) of its output (the spare row 2ℓ_max + 1 for μ = 0), from the rows rows[k, 2:8] of its input with the
-    weights coefs[k] (:func:`_pass`; three terms of A and three of B: one pass per μ for ℓ ≤ 5, two for ℓ ≤ 8,
-    ~2 ns per sample less than two and two for ℓ ≤ 4, measured), and rows[k, 8] is 1 if it adds to what earlier
-    passes wrote."""
+    weights coefs[k] (:func:`_pass`; three terms of A and three of B: one pass per μ for ℓ ≤ 5, two for
+    ℓ ≤ 8), and rows[k, 8] is 1 if it adds to what earlier passes wrote."""
     return _plan(columns.shape[0] - 1, columns.tobytes())
 
 
@@ -136,13 +135,11 @@ _CHUNK = 256
 
 MIN_PART = 1024
 """Samples per thread at least for :func:`_rotate` and :func:`pnrotor.waveform.amplitudes._sum`, which compute runs
-of 2 MIN_PART samples or more in parts on the machine's threads (:mod:`pnrotor.threads`; measured, modes of a
-precessing run, one part against two: ℓ ≤ 4 at 1.5PN 214 and 226 µs for 1,024 samples, 378 and 311 µs for 2,048;
-ℓ ≤ 8 at 3.5PN 578 and 388 µs for 1,024)."""
+of 2 MIN_PART samples or more in parts on the machine's threads (:mod:`pnrotor.threads`)."""
 
 
 # The kernels' innermost loops, one per function over the samples s of a block, on the block arrays and row
-# indices.  Written inline they measured no faster (LLVM left most of them scalar there).
+# indices.  Written inline they were no faster (LLVM left most of them scalar there).
 
 @njit(cache=True, fastmath={"contract"})
 def _times_phase(x_re, x_im, r, e_re, e_im, u, conj, out_re, out_im, ro, nb):
@@ -208,7 +205,7 @@ def _pass(y, x, rows, coefs, k, nb):
 @njit(cache=True)
 def _rotor_rows(R, i0, nb, q):
     """Rows w, x, y, z of q (4, _CHUNK) = the rotors R[i0 : i0 + nb]: LLVM vectorizes a loop over rows, not over
-    R's strided columns (the loop of :func:`_rotor_block`: ~8 → ~3 ns per sample, measured)."""
+    R's strided columns (the loop of :func:`_rotor_block`)."""
     for s in range(nb):
         for k in range(4):
             q[k, s] = R[i0 + s, k]
