@@ -58,7 +58,7 @@ from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _ended_at,
                      half, kmax_of, population_parts, termination, warn_if_unresolved)
 from .sampling import _fill_history, output_mode
 from .settings import Binaries, binary_settings, options, population_settings, target_v
-from .system import EV_V_END, N_EVENTS, P_VEND
+from .layout import EV_V_END, N_EVENTS, P_VEND
 
 __all__ = ["evolve_many", "Population", "spin_angles", "INSPIRAL_ENDS"]
 

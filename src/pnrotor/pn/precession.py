@@ -37,7 +37,7 @@ order this is exactly ⟨ϖ n̂⟩ with ϖ from Bohé+ 2013 Eq. (4.4):
 ⟨ϖ n̂⟩ = ½ v⁶ (7 S⊥ + 3δ Σ⊥) = v⁶ Σᵢ (2 + 3Xⱼ/(2Xᵢ)) Sᵢ⊥ (checked in the tests).  |L| is kept
 to the same relative order as the spin-orbit precession: L₂ with NLO, L₄ with NNLO.
 
-The frame rotor then obeys dR/dt = ½ (Φ̇ ℓ̂ + Ω_ℓ) R (see :mod:`pnrotor.pn.system`).
+The frame rotor then obeys dR/dt = ½ (Φ̇ ℓ̂ + Ω_ℓ) R (see :mod:`pnrotor.pn.rhs`).
 
 Why the torque form is the default: it is the model LALSuite integrates (the acceptance reference) and
 it keeps J = L + S₁ + S₂ fixed except for radiation reaction along ℓ̂ (tested).  Beyond leading order

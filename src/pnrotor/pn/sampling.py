@@ -29,7 +29,7 @@ except ImportError:  # pragma: no cover - not Unix
 import numpy as np
 from numba import njit
 
-from . import system as _sys
+from . import layout
 
 MODE_ALIGNED, MODE_COPRECESSING, MODE_ORBITAL = 0, 1, 2
 """How a state row becomes a history row: see :func:`_store_block`."""
@@ -355,7 +355,7 @@ def sample(s, res_f, res_b):
         _check_memory((_t_end(res_f) - (0.0 if res_b is None else _t_end(res_b))) / dt, s)
         t_out, nb = _uniform_times(dt, _t_end(res_f), None if res_b is None else _t_end(res_b))
     else:
-        phi_i = _sys.YA_PHI if s.use_aligned else _sys.Y_PHI
+        phi_i = layout.YA_PHI if s.use_aligned else layout.Y_PHI
         _check_memory((res_f.y[-1, phi_i] - (0.0 if res_b is None else res_b.y[-1, phi_i]))
                       * s.sampling_value / (2.0 * math.pi), s)
         t_out, nb = _orbit_times(s.sampling_value, phi_i, res_f, res_b)

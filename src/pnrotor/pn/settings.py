@@ -20,8 +20,8 @@ from typing import NamedTuple
 import numpy as np
 
 from . import initial as _ini
+from .approximants import normalize_approximant
 from .series import MAX_ORDER
-from .system import APPROXIMANTS
 
 MAX_SO_ORDER = 4.0
 MAX_SS_ORDER = 3.0
@@ -398,18 +398,6 @@ def _spin_content(c1, c2, ell):
     else:
         content = "nonspinning"   # (zero spins have no in-plane part)
     return content, a1 * ell, a2 * ell
-
-
-def normalize_approximant(approximant):
-    """'T1', 'T4' or 'T5' from 'Tn' (either case), 'TaylorTn' or 'SpinTaylorTn'; else a ValueError."""
-    a = str(approximant).strip()
-    for prefix in ("SpinTaylor", "Taylor"):
-        if a.startswith(prefix):
-            a = a[len(prefix):]
-    a = a.upper()
-    if a not in APPROXIMANTS:
-        raise ValueError(f"approximant must be one of T1, T4, T5 (or TaylorTn / SpinTaylorTn), got {approximant!r}")
-    return a
 
 
 def _order(x, name, lo, hi):

@@ -1,0 +1,68 @@
+"""The layout of the post-Newtonian system: its state vectors, its events and its parameter vector ``p``.
+
+The right-hand sides and events (:mod:`pnrotor.pn.rhs`) read the state and ``p`` by these indices; the parameter
+vector is built by :mod:`pnrotor.pn.system`, the spin-independent part by the coefficient functions of
+:mod:`pnrotor.pn.energy`, :mod:`pnrotor.pn.flux` and :mod:`pnrotor.pn.precession`.
+"""
+
+from .series import SERIES_SLOTS
+
+# state layout
+Y_V = 0
+Y_CHI1 = 1      # 1, 2, 3
+Y_CHI2 = 4      # 4, 5, 6
+Y_R = 7         # 7, 8, 9, 10  (w, x, y, z)
+Y_PHI = 11
+N_PRECESSING = 12
+# aligned state
+YA_V = 0
+YA_PHI = 1
+N_ALIGNED = 2
+
+N_EVENTS = 7
+EV_V_END, EV_ENERGY, EV_VDOT, EV_SPIN1, EV_SPIN2, EV_POLE, EV_VDOT_PEAK = range(N_EVENTS)
+
+# parameter vector layout
+P_X1 = 0
+P_X2 = 1
+P_NU = 2
+P_VDOT0 = 3      # 32ν/5
+P_VEND = 4       # v at which event 0 fires
+P_ROTOR = 5      # 0 coprecessing, 1 orbital
+P_SHIFT = 6      # 1: apply the precession phase shift
+P_W1 = 7         # phase-shift weights w₁, w₂
+P_W2 = 8
+P_SO1 = 9        # σ₀, σ₂, σ₄ of body 1 (zeroed when truncated)
+P_SO2 = 12       # σ₀, σ₂, σ₄ of body 2
+P_SS2_1 = 15     # 2PN spin-spin: c_j, c_j⊥, c_i⊥ for body 1
+P_SS2_2 = 18     # ... body 2
+P_SS3_1 = 21     # 3PN spin-spin: c_j, c_j⊥, c_i⊥ for body 1
+P_SS3_2 = 24     # ... body 2
+P_L2 = 27        # |L| = (ν/v)(1 + L₂v² + L₄v⁴)
+P_L4 = 28
+P_SPINTOL = 29   # |χ|² may exceed 1 by this much before event 3/4 fires
+P_DEN_EPS = 30   # event 5 fires when the denominator D of v̇ falls to this value
+# instantaneous precession (rhs_precessing_instantaneous only)
+P_VARPI1 = 31    # w₀, w₂, w₄ of ϖ for body 1 (zeroed when truncated)
+P_VARPI2 = 34    # ... body 2
+P_ISS1 = 37      # body 1: 2PN a_j, a_jn, a_in; 3PN b_j, b_jn, b_jλ, b_in, b_iλ (zeroed when truncated)
+P_ISS2 = 45      # ... body 2
+P_OMEGA_L = 53   # 0: Ω_ℓ from −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| (LALSuite); 1: its spin-orbit part from ⟨ϖ n̂⟩ (Bohé+ 2013)
+# the series N, D, Ê′, each a header and its coefficients (series.fold_and_store)
+P_NUM = 54
+P_DEN = P_NUM + SERIES_SLOTS
+P_EP = P_DEN + SERIES_SLOTS
+P_SIZE = P_EP + SERIES_SLOTS
+
+SPIN_TOL = 1e-10
+DEN_EPS = 1e-3
+
+
+def spin_tolerance(atol, rtol):
+    """How far |χᵢ|² may exceed 1 before events 3/4 end a run: 1000 (atol + rtol), at least SPIN_TOL and at
+    most 1e-3 (a drift of that size is a failed integration whatever was asked).  The
+    equations conserve |χᵢ|; the integration lets it drift by a few atol (measured: 4–12 atol with the
+    co-precessing rotor, 0.3–0.6 with the orbital one, maximal spins 30 + 10 M☉ from 10 Hz to the end, atol
+    1e-12 … 1e-6), which with a fixed 1e-10 ended such runs as 'spin_magnitude' from atol 1e-10 up (at
+    1e-6, at 21 Hz instead of 197): only a real failure ends a run here, not the requested tolerance."""
+    return min(1e-3, max(SPIN_TOL, 1e3 * (atol + rtol)))
