@@ -38,7 +38,7 @@ TIDES = ("as_is", "N", "D")
 """Where terms added to F̂ and Ê′ at first order go (:attr:`Approximant.tides`)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Approximant:
     """One approximant of :data:`REGISTRY`.
 
@@ -49,7 +49,8 @@ class Approximant:
     F̂/Ê′), 'D' (D is the re-expanded Ê′/F̂), or None (the approximant takes neither: a ValueError);
     ``pole``: the termination when D falls to DEN_EPS (event 5; 'energy_balance' where D is Ê′ itself);
     ``lal_name``, ``lal_orders``: LALSuite's approximant of this model and the options that give its truncation
-    at phaseO = 7, spinO = −1 (:func:`pnrotor.pn.evolve.lalsuite_orders`), or None."""
+    at phaseO = 7, spinO = −1 (:func:`pnrotor.pn.evolve.lalsuite_orders`), or None.  Equal only to itself (a
+    cache keyed on it forgets an entry replaced under the same name)."""
 
     name: str
     vdot: object
@@ -107,7 +108,10 @@ def normalize_approximant(approximant):
 
 
 def get(approximant):
-    """The :class:`Approximant` of a name or alias (:func:`normalize_approximant`)."""
+    """The :class:`Approximant` of a name or alias (:func:`normalize_approximant`), or ``approximant`` itself if it is
+    one."""
+    if isinstance(approximant, Approximant):
+        return approximant
     return REGISTRY[normalize_approximant(approximant)]
 
 

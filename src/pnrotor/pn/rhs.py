@@ -1,4 +1,4 @@
-r"""State layout, parameter vector and numba right-hand sides of the post-Newtonian system.
+r"""The numba right-hand sides and events of the post-Newtonian system (its layout: :mod:`pnrotor.pn.layout`).
 
 Two specializations, each a top-level ``@njit(cache=True)`` function that :func:`pnrotor.ode.by_address`
 compiles for ``RHS_SIG`` (or ``EVENTS_SIG``) when a run first needs it, so the DOP853 driver (which takes
@@ -16,7 +16,7 @@ reordered, and inf and nan propagate as without it.
   the spin equations and the precession are not integrated at all, and the frame is reconstructed
   exactly as R(t) = R₀ exp(Φ ẑ/2).
 
-Approximant (TaylorT1/T4/T5), PN orders and spin content are *data*: the parameter vector ``p``
+Approximant, PN orders and spin content are *data*: the parameter vector ``p`` (:mod:`pnrotor.pn.system`)
 holds the series coefficients with every truncated term zeroed (see :mod:`pnrotor.pn.series`), so
 one compiled function serves every approximant and order.  Each series is stored behind a header of
 the powers of v that hold spin and logarithmic terms (:func:`~pnrotor.pn.series.fold_and_store`), so
@@ -26,15 +26,9 @@ gives v dS/dv with S (event 6).
 Equations (units G = c = M = 1, t in units of M)
 -------------------------------------------------
 * Energy balance: v̇ = −F/E′ = (32ν/5) v⁹ N(v)/D(v), with E = −(νv²/2)Ê and F = (32/5)ν²v¹⁰F̂
-  (:mod:`~pnrotor.pn.energy`, :mod:`~pnrotor.pn.flux`), and
-
-      TaylorT1: N = F̂, D = Ê′ evaluated as they are;
-      TaylorT4: N = [F̂/Ê′] re-expanded and truncated, D = 1;
-      TaylorT5: N = 1, D = [Ê′/F̂] re-expanded and truncated (the inverse, Ajith 2011, arXiv:1107.1267);
-
-  with neutron-star tides, the 5PN and 6PN tidal terms of Ê and F̂ (Vines et al. 2011) added to F̂ and Ê′ (T1)
-  or carried through the re-expansion to first order in Λᵢ (T4, T5), as LALSuite's SpinTaylor does
-  (:func:`_add_tides`).
+  (:mod:`~pnrotor.pn.energy`, :mod:`~pnrotor.pn.flux`), N and D the approximant's
+  (:mod:`~pnrotor.pn.approximants`: TaylorT1 N = F̂, D = Ê′; TaylorT4 N = [F̂/Ê′], D = 1; TaylorT5 N = 1,
+  D = [Ê′/F̂]), with neutron-star tides to first order in Λᵢ (:func:`pnrotor.pn.approximants.add_tides`).
 
 * Spins: χ̇ᵢ = Ωᵢ × χᵢ (:mod:`~pnrotor.pn.precession`).
 * Frame: dR/dt = ½ Ω R with ℓ̂ = R ẑ R⁻¹, n̂ = R x̂ R⁻¹ (Boyle 2016, arXiv:1604.08139,

@@ -58,8 +58,9 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     Everything but v_end, spin_tol and the stored series comes from :func:`_spin_independent_parts` (cached).
     :func:`start_rows` builds the same p for many binaries at once.
     """
+    a = approximants.get(approximant)
     head, N, D, Ep = _spin_independent_parts(
-        (X1, approximant, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
+        (X1, a, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
          math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), lambda1, lambda2, rotor, bool(phase_shift), omega_l))
     p = np.zeros(P_SIZE)
     p[:P_NUM] = head
@@ -68,7 +69,7 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     fold = aligned_basis is not None
     b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
     if horizon:
-        N, D = approximants.add_horizon_flux(approximants.get(approximant), horizon, N, D)   # copies
+        N, D = approximants.add_horizon_flux(a, horizon, N, D)   # copies: the cached series are shared
     at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
     return p if v_check is None else (p, at_v)
 
@@ -95,7 +96,9 @@ def start_rows(heads, N, D, Ep, rows, bases, fold, v_end, spin_tol, c_addr, jit_
 
 @functools.lru_cache(maxsize=64)
 def _spin_independent_parts(key):
-    """:func:`spin_independent_parts` of one binary, ``key`` = (X1, approximant, kmax as a tuple, so_order,
+    """:func:`spin_independent_parts` of one binary, ``key`` = (X1, approximant (make_parameters gives its
+    :class:`~pnrotor.pn.approximants.Approximant`, so an entry registered anew under a name is not served from the
+    cache), kmax as a tuple, so_order,
     ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives other signed zeros), Λ₁, Λ₂, rotor, phase_shift,
     omega_l), as (p head, N, D, Ê′), kept in a small LRU cache (repeated runs of one binary, or of one mass
     ratio, skip its ~65 µs of Python; code that replaces a coefficient function must call
@@ -111,7 +114,8 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
                            lambda1=0.0, lambda2=0.0):
     """Everything :func:`make_parameters` (and :func:`start_rows`) builds that does not depend on the spins or
     v_end, for n binaries that share the options and differ in X1, κ₁, κ₂, Λ₁, Λ₂ (arrays (n,), or floats for one
-    binary): (heads (n, P_NUM), p before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
+    binary; ``approximant`` a name or its :class:`~pnrotor.pn.approximants.Approximant`): (heads (n, P_NUM), p
+    before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
     :func:`pnrotor.pn.approximants.vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
     binary, against ~65 µs of Python floats for one, measured; 85 µs before the imports left the function and
     :func:`pnrotor.pn.series.shape_of` replaced np.shape).  The numbers are built with the binaries
