@@ -15,7 +15,7 @@ import pnrotor.integrate
 from pnrotor.analytic import PrecessingNutatingBinary
 from pnrotor.cli import main
 from pnrotor.ode import bulirsch_stoer, dop853
-from pnrotor.pn.approximants import normalize_approximant
+from pnrotor.approximants import normalize_approximant
 
 NAN, INF = math.nan, math.inf
 GOOD = dict(m1=10.0, m2=10.0, chi1=(0.0, 0.0, 0.0), chi2=(0.0, 0.0, 0.0), f_ref=20.0)

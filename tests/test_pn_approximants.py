@@ -1,4 +1,4 @@
-"""A new approximant is one registry entry plus its v̇ function (pnrotor.pn.approximants): a toy one registered here
+"""A new approximant is one registry entry plus its v̇ function (pnrotor.approximants): a toy one registered here
 runs end to end through evolve and evolve_many, and its runs follow the closed-form solution of its v̇."""
 
 import numpy as np
@@ -6,12 +6,13 @@ import pytest
 from numba import njit
 
 import pnrotor
-from pnrotor.pn import approximants
+from pnrotor import approximants
+from pnrotor.pn import vdot
 
 
 @njit(cache=True)
 def newtonian(Ep, F, kmax, N, D):
-    """A toy approximant's v̇ (approximants.VDOT_SIG): the leading order whatever the PN order, N = D = 1."""
+    """A toy approximant's v̇ (pnrotor.pn.vdot.VDOT_SIG): the leading order whatever the PN order, N = D = 1."""
     N[0, 0, 0] = 1.0
     D[0, 0, 0] = 1.0
 
@@ -63,5 +64,5 @@ def test_an_unregistered_approximant_is_refused_and_a_name_can_be_registered_ane
     approximants.unregister("TN")
     with pytest.raises(ValueError, match="approximant must be one of T1, T4, T5 "):
         pnrotor.evolve(*args, approximant="TN")
-    approximants.register(approximants.Approximant("TN", approximants.taylor_t4, "T4 under another name"))
+    approximants.register(approximants.Approximant("TN", vdot.taylor_t4, "T4 under another name"))
     np.testing.assert_array_equal(pnrotor.evolve(*args, approximant="TN").Phi, pnrotor.evolve(*args).Phi)

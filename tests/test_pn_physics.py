@@ -206,7 +206,8 @@ def test_vdot_peak_event_is_the_v_derivative_of_omega_dot(approximant):
     """Event 6 is v⁻¹⁰ D² ∂(v²v̇)/∂v/(32ν/5) at fixed spins and ℓ̂ (ω̇ = 3v²v̇/M, LAL's d²ω/dt² test):
     checked against a central difference of v²v̇ from the right-hand side, for a precessing state and for
     the aligned (folded) one."""
-    from pnrotor.pn import approximants, layout, rhs, system
+    from pnrotor.pn import layout, rhs, system
+    from pnrotor.pn.vdot import vdot_series
     from pnrotor.pn.series import basis_values, eval_at, kmax_from_orders
     X1, v = 0.7, 0.35
     kmax = kmax_from_orders(3.5, 3.5, 3)
@@ -215,7 +216,7 @@ def test_vdot_peak_event_is_the_v_derivative_of_omega_dot(approximant):
     y[7:11] /= np.linalg.norm(y[7:11])
     ell = np.array(rhs._ell_hat(*y[7:11]))
     bvals = basis_values(ell @ c1, ell @ c2, c1 @ c2, c1 @ c1, c2 @ c2)
-    N, D, _ = approximants.vdot_series(X1, approximant, kmax)
+    N, D, _ = vdot_series(X1, approximant, kmax)
     for aligned in (False, True):
         p = system.make_parameters(X1, approximant, kmax, so_order=3.5, ss_order=3.0,
                                    aligned_basis=bvals if aligned else None)

@@ -199,7 +199,7 @@ def test_f_ref_past_the_peak_of_vdot_is_a_value_error():
 def _omega_dot_of_v(v, X1, chi, approximant, orders):
     """v²v̇(v) ∝ ω̇ for spins χ ẑ on both bodies, from the numpy series evaluator (not the numba event code)."""
     from pnrotor.pn.series import basis_values, evaluate, kmax_from_orders
-    from pnrotor.pn.approximants import vdot_series
+    from pnrotor.pn.vdot import vdot_series
     N, D, _ = vdot_series(X1, approximant, kmax_from_orders(*orders))
     b = basis_values(chi, chi, chi * chi, chi * chi, chi * chi)
     return v ** 11 * evaluate(N, v, b) / evaluate(D, v, b)

@@ -9,7 +9,7 @@ import numpy as np
 from numba import njit
 
 from ..ode.common import events_function
-from .approximants import vdot_series
+from .vdot import vdot_series
 from .layout import DEN_EPS, EV_ENERGY, EV_POLE, EV_VDOT, EV_VDOT_PEAK, N_EVENTS, Y_V
 from .rhs import vdot_peak
 from .series import evaluate, v_derivative

@@ -52,7 +52,8 @@ from ..ode.common import OUT_FINAL, OUT_STEPS, controller, default_hook
 from ..ode.dop853 import run_core
 from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
-from . import approximants, ends, layout, rhs, system
+from .. import approximants
+from . import ends, layout, rhs, system
 from . import initial as _ini
 from .flux import horizon_flux
 from .sampling import compile_output_kernel, sample
@@ -556,7 +557,7 @@ def lalsuite_orders(approximant, phaseO=7, spinO=-1, tideO=-1):
     * tides: tideO = −1 (LAL's default, ``LAL_SIM_INSPIRAL_TIDAL_ORDER_ALL``) or 12 → tidal_order 6; 10 (5PN
       only) → 5; 0 → 0.
 
-    The orders are the approximant's ``lal_orders`` in :mod:`pnrotor.pn.approximants`.
+    The orders are the approximant's ``lal_orders`` in :mod:`pnrotor.approximants`.
     """
     a = approximants.get(approximant)
     if a.lal_orders is None:

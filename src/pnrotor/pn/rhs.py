@@ -27,8 +27,8 @@ Equations (units G = c = M = 1, t in units of M)
 -------------------------------------------------
 * Energy balance: v̇ = −F/E′ = (32ν/5) v⁹ N(v)/D(v), with E = −(νv²/2)Ê and F = (32/5)ν²v¹⁰F̂
   (:mod:`~pnrotor.pn.energy`, :mod:`~pnrotor.pn.flux`), N and D the approximant's
-  (:mod:`~pnrotor.pn.approximants`: TaylorT1 N = F̂, D = Ê′; TaylorT4 N = [F̂/Ê′], D = 1; TaylorT5 N = 1,
-  D = [Ê′/F̂]), with neutron-star tides to first order in Λᵢ (:func:`pnrotor.pn.approximants.add_tides`).
+  (:mod:`~pnrotor.approximants`: TaylorT1 N = F̂, D = Ê′; TaylorT4 N = [F̂/Ê′], D = 1; TaylorT5 N = 1,
+  D = [Ê′/F̂]), with neutron-star tides to first order in Λᵢ (:func:`pnrotor.pn.vdot.add_tides`).
 
 * Spins: χ̇ᵢ = Ωᵢ × χᵢ (:mod:`~pnrotor.pn.precession`).
 * Frame: dR/dt = ½ Ω R with ℓ̂ = R ẑ R⁻¹, n̂ = R x̂ R⁻¹ (Boyle 2016, arXiv:1604.08139,

@@ -37,7 +37,7 @@ k and the spin power.
 
 Tidal terms (linear in the deformabilities Λᵢ, spin-independent, b = 0) are the terms with k ≥ TIDAL_K = 10:
 no point-particle term reaches that power, so the rule above (k ≤ kmax[0] ≤ 9) drops them, and a fourth entry
-``kmax[3]`` (the tidal order × 2, or −1) keeps them separately: :func:`pnrotor.pn.approximants.add_tides` carries them
+``kmax[3]`` (the tidal order × 2, or −1) keeps them separately: :func:`pnrotor.pn.vdot.add_tides` carries them
 through the approximants' ratios to first order in Λ.
 
 The logarithm ln v is treated as an O(1) number (its coefficient is part of the v^k coefficient), the

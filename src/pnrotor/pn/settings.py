@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from . import initial as _ini
-from .approximants import normalize_approximant
+from ..approximants import normalize_approximant
 from .series import MAX_ORDER
 
 MAX_SO_ORDER = 4.0

@@ -2,7 +2,7 @@ r"""The parameter vector ``p`` of the post-Newtonian system (:mod:`pnrotor.pn.la
 and events (:mod:`pnrotor.pn.rhs`) read: the approximant, PN orders and spin content are *data* there, so one
 compiled function serves every approximant and order.
 
-``p`` holds the series N, D of v̇ = (32ν/5) v⁹ N/D and Ê′ (:mod:`pnrotor.pn.approximants`), every truncated term
+``p`` holds the series N, D of v̇ = (32ν/5) v⁹ N/D and Ê′ (:mod:`pnrotor.pn.vdot`), every truncated term
 zeroed (:mod:`pnrotor.pn.series`), each behind a header of the powers of v that hold spin and logarithmic terms
 (:func:`~pnrotor.pn.series.fold_and_store`), and the precession coefficients (:mod:`pnrotor.pn.precession`).
 :func:`make_parameters` builds it for one binary, :func:`start_rows` for many binaries at once (``evolve_many``),
@@ -15,7 +15,8 @@ import math
 import numpy as np
 from numba import njit
 
-from . import approximants
+from .. import approximants
+from . import vdot
 from .ends import earlier_end
 from .energy import energy_series
 from .flux import flux_series
@@ -54,7 +55,7 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     v_check) instead of p, for checking the initial point.
     ``spin_tol``: how far |χᵢ|² may exceed 1 before events 3/4 end the run (:func:`pnrotor.pn.layout.spin_tolerance`).
     ``horizon``: {k: c} of the flux into the horizons F̂_H (:func:`pnrotor.pn.flux.horizon_flux`, aligned runs),
-    added to the energy balance at first order (:func:`pnrotor.pn.approximants.add_horizon_flux`).
+    added to the energy balance at first order (:func:`pnrotor.pn.vdot.add_horizon_flux`).
     Everything but v_end, spin_tol and the stored series comes from :func:`_spin_independent_parts` (cached).
     :func:`start_rows` builds the same p for many binaries at once.
     """
@@ -69,7 +70,7 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     fold = aligned_basis is not None
     b = np.asarray(aligned_basis if fold else (basis if basis is not None else _UNIT_BASIS), dtype=np.float64)
     if horizon:
-        N, D = approximants.add_horizon_flux(a, horizon, N, D)   # copies: the cached series are shared
+        N, D = vdot.add_horizon_flux(a, horizon, N, D)   # copies: the cached series are shared
     at_v = _store_series(N, D, Ep, b, fold, p, 0.5 if v_check is None else float(v_check))
     return p if v_check is None else (p, at_v)
 
@@ -97,7 +98,7 @@ def start_rows(heads, N, D, Ep, rows, bases, fold, v_end, spin_tol, c_addr, jit_
 @functools.lru_cache(maxsize=64)
 def _spin_independent_parts(key):
     """:func:`spin_independent_parts` of one binary, ``key`` = (X1, approximant (make_parameters gives its
-    :class:`~pnrotor.pn.approximants.Approximant`, so an entry registered anew under a name is not served from the
+    :class:`~pnrotor.approximants.Approximant`, so an entry registered anew under a name is not served from the
     cache), kmax as a tuple, so_order,
     ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives other signed zeros), Λ₁, Λ₂, rotor, phase_shift,
     omega_l), as (p head, N, D, Ê′), kept in a small LRU cache (repeated runs of one binary, or of one mass
@@ -114,9 +115,9 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
                            lambda1=0.0, lambda2=0.0):
     """Everything :func:`make_parameters` (and :func:`start_rows`) builds that does not depend on the spins or
     v_end, for n binaries that share the options and differ in X1, κ₁, κ₂, Λ₁, Λ₂ (arrays (n,), or floats for one
-    binary; ``approximant`` a name or its :class:`~pnrotor.pn.approximants.Approximant`): (heads (n, P_NUM), p
+    binary; ``approximant`` a name or its :class:`~pnrotor.approximants.Approximant`): (heads (n, P_NUM), p
     before the series, without v_end; N, D, Ê′ (n, NK, NB, NL), the series of
-    :func:`pnrotor.pn.approximants.vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
+    :func:`pnrotor.pn.vdot.vdot_series`).  Arrays take one pass of numpy over the binaries (``evolve_many``: ~7 µs per
     binary, against ~65 µs of Python floats for one, measured; 85 µs before the imports left the function and
     :func:`pnrotor.pn.series.shape_of` replaced np.shape).  The numbers are built with the binaries
     last (p[j] = x is then a row) and turned binaries-first at the end (only the head of p: with all of it
@@ -162,16 +163,16 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     p[P_L4] = L4 if inc["so_nnlo"] else 0.0
     p[P_DEN_EPS] = DEN_EPS
     E, F = energy_series(X1, kappa1, kappa2, lambda1, lambda2), flux_series(X1, kappa1, kappa2, lambda1, lambda2)
-    kmax, at = np.array(kmax, dtype=np.int64), approximants.vdot_addresses(a)
+    kmax, at = np.array(kmax, dtype=np.int64), vdot.vdot_addresses(a)
     if not shape_of(X1):   # one binary (evolve): vdot_series_each would cost 3.5 s more to compile, cold
-        N, D, Ep = approximants.point_particle_series(E, F, kmax, *at)
+        N, D, Ep = vdot.point_particle_series(E, F, kmax, *at)
         if lambda1 or lambda2:
-            approximants.add_tides(a, E, F, kmax, N, D, Ep)
+            vdot.add_tides(a, E, F, kmax, N, D, Ep)
         return p[None], N[None], D[None], Ep[None]
     E, F = (np.ascontiguousarray(np.moveaxis(x, -1, 0)) for x in (E, F))
-    N, D, Ep = approximants.vdot_series_each(E, F, kmax, *at)
+    N, D, Ep = vdot.vdot_series_each(E, F, kmax, *at)
     if np.any(lambda1) or np.any(lambda2):
-        approximants.add_tides(a, E, F, kmax, N, D, Ep)
+        vdot.add_tides(a, E, F, kmax, N, D, Ep)
     return np.ascontiguousarray(p.T), N, D, Ep
 
 
