@@ -65,7 +65,7 @@ from typing import NamedTuple
 import h5py
 import numpy as np
 
-from pnrotor import __version__, signals
+from pnrotor import __version__, approximants, signals
 
 SCHEMA_VERSION = 2
 """Integer version of the layout below; `read` refuses files with a newer one.  Version 2 stores every string
@@ -186,7 +186,7 @@ ARRAYS = {
                                  "(NaN: no f_min)", finite=False),
         "inputs/f_max_Hz": Array(("N",), "Hz; the state is the one at this GW frequency (NaN: no f_max; with "
                                  "neither, the end of the inspiral)", finite=False),
-        "inputs/approximant": Array(("N",), "T1, T4 or T5", "str"),
+        "inputs/approximant": Array(("N",), approximants.names(), "str"),
         "inputs/pn_order": Array(("N",), "PN order of the nonspinning terms"),
         "inputs/spin_orbit_order": Array(("N",), "PN order of the spin-orbit terms (-1: none; NaN: pnrotor.evolve's "
                                          "default)", finite=False),
