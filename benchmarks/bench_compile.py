@@ -73,14 +73,14 @@ import numpy as np
 from numba import njit
 from pnrotor.ode import EVENTS_SIG, by_address
 from pnrotor.pn import ends, lalsuite_orders, layout, rhs, system
-from pnrotor.pn.evolve import _OPTIONS, build_system
+from pnrotor.pn.evolve import OPTIONS, build_system
 from pnrotor.pn.settings import settings
 from pnrotor.pn.series import kmax_from_orders
 
-s = settings(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 20.0, **{**_OPTIONS, **lalsuite_orders("T4")})
+s = settings(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 20.0, **{**OPTIONS, **lalsuite_orders("T4")})
 t = time.perf_counter()
 events = by_address(rhs.events_precessing, EVENTS_SIG)
-parts = system._spin_independent_parts((s.X1, s.approximant, tuple(kmax_from_orders(3.5, 3.0, 3.0).tolist()), 3.0,
+parts = system.cached_spin_independent_parts((s.X1, s.approximant, tuple(kmax_from_orders(3.5, 3.0, 3.0).tolist()), 3.0,
                                         3.0, 1.0, 1.0, 1.0, 1.0, s.rotor, True, "torque"))
 print(f"events function and spin-independent parts: {time.perf_counter() - t:.2f} s")
 head, N, D, Ep = parts

@@ -345,7 +345,7 @@ def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
     system.start_rows (evolve.build_rows), evolve those of its one binary by make_parameters and earlier_end
     (evolve.build_system): each row must be bitwise the other's (p, y0, the spin invariants, the start checks),
     whatever the order of the rows taken from the spin-independent parts."""
-    from pnrotor.pn.evolve import _OPTIONS, build_rows, build_system, population_parts
+    from pnrotor.pn.evolve import OPTIONS, build_rows, build_system, population_parts
     from pnrotor.pn.settings import Options, population_settings, settings
     rng = np.random.default_rng(12)
     n = 40
@@ -354,7 +354,7 @@ def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
     ell = np.array([0.6, 0.0, 0.8])
     if spins == "aligned":
         c1, c2 = c1[:, 2:] * ell, c2[:, 2:] * ell
-    options = {**_OPTIONS, "sampling": "final", "kappa1": 4.0, "kappa2": 2.0, "ell_hat": ell, "n_hat": (0.0, 1.0, 0.0)}
+    options = {**OPTIONS, "sampling": "final", "kappa1": 4.0, "kappa2": 2.0, "ell_hat": ell, "n_hat": (0.0, 1.0, 0.0)}
     ss = [settings(m1[i], m2[i], c1[i], c2[i], 20.0, **{**options, "f_max": 200.0 + i}) for i in range(n)]
     assert {s.spin_content for s in ss} == {spins}
     order = rng.permutation(n)             # row i from row order[i] of the parts

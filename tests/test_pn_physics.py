@@ -318,11 +318,11 @@ def test_per_orbit_times_are_the_roots_of_the_interpolated_phase(forward):
     brentq's accuracy (~1e-15); a target at a step boundary gives that boundary, one rounded past the end the end itself."""
     from scipy.optimize import brentq
 
-    from pnrotor.pn.evolve import _OPTIONS, build_system, integrate_half
+    from pnrotor.pn.evolve import OPTIONS, build_system, integrate_half
     from pnrotor.pn.sampling import _phase_times
     from pnrotor.pn.settings import settings
 
-    s = settings(30.0, 10.0, (0.5, 0.1, 0.3), (0.0, 0.4, -0.2), 20.0, **{**_OPTIONS, "f_min": 10.0})
+    s = settings(30.0, 10.0, (0.5, 0.1, 0.3), (0.0, 0.4, -0.2), 20.0, **{**OPTIONS, "f_min": 10.0})
     res, _ = integrate_half(s, build_system(s), forward, None, True)
     d, i = res.dense, 11
     phi = lambda t: d(t)[i]   # noqa: E731
@@ -359,7 +359,7 @@ def test_a_half_without_a_step_samples_as_steps_does(sampling):
     half had steps."""
     import dataclasses
 
-    from pnrotor.pn.evolve import _OPTIONS, build_system, integrate_half
+    from pnrotor.pn.evolve import OPTIONS, build_system, integrate_half
     from pnrotor.pn.sampling import sample
     from pnrotor.pn.settings import settings
 
@@ -371,7 +371,7 @@ def test_a_half_without_a_step_samples_as_steps_does(sampling):
         for name in ("t", "v", "Phi", "chi1", "chi2", "R", "ell_hat"):
             np.testing.assert_array_equal(getattr(run, name), getattr(steps, name))
     s = settings(30.0, 10.0, (0.5, 0.1, 0.3), (0.0, 0.4, -0.2), 100.0,
-                 **{**_OPTIONS, "f_min": 70.0, "sampling": sampling})
+                 **{**OPTIONS, "f_min": 70.0, "sampling": sampling})
     system = build_system(s)
     backward, _ = integrate_half(s, system, False, None, True)
     forward, _ = integrate_half(s, system, True, None, True)
@@ -488,7 +488,7 @@ def test_output_kernel_matches_the_integrators_dense_output():
     r = dop853(rhs.rhs_precessing, 0.0, y0, 3000.0, 1e-12, args=p, dense=True)
     tq = np.linspace(0.0, 3000.0, 777)
     hist = ev._allocate_history(tq.size)
-    ev._fill_history(ev.MODE_ORBITAL, r.dense.seg_t, r.dense.seg_h, r.dense.coef, tq, False, ev._NO_Y,
+    ev.fill_history(ev.MODE_ORBITAL, r.dense.seg_t, r.dense.seg_h, r.dense.coef, tq, False, ev.NO_Y,
                      np.array([1.0, 0, 0, 0]), Z, np.zeros(3), np.zeros(3), 0, *hist)
     Y = r.dense(tq)
     # equal up to the rounding of fused multiply-adds (the ODE kernel contracts, ours need not) and, for

@@ -291,9 +291,9 @@ def run_scipy(case, method, tol, n_samples):
 def timed(fn):
     """Wall time of fn() including freeing its result; returns (seconds, small summary of the result).  pnrotor's
     cache of a binary's spin-independent set-up is emptied first: every call pays it, as for a new binary."""
-    from pnrotor.pn.system import _spin_independent_parts
+    from pnrotor.pn.system import cached_spin_independent_parts
 
-    _spin_independent_parts.cache_clear()
+    cached_spin_independent_parts.cache_clear()
     t = time.perf_counter()
     out = fn()
     summary = out.stats["wall_time_integrate_s"] if hasattr(out, "stats") else None

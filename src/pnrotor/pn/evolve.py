@@ -80,7 +80,7 @@ CONTROLLER = dict(safety=0.85, max_factor=4.0)
 """DOP853 step-size controller for the inspiral.  With Hairer's defaults (0.9, 6) the accelerating chirp
 makes every few steps a rejection (18–57 of 116–216 attempts in the LALSuite comparison cases); with
 (0.85, 4) there are none and the runs cost 10–35% fewer evaluations (benchmarks/bench_pn.py)."""
-_CONTROLLER = controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
+CONTROLLER_ARGS = controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
 """(safety, min_factor, max_factor) as :func:`pnrotor.ode.dop853` would check them (min_factor its default)."""
 
 
@@ -195,7 +195,7 @@ def build_system(s):
         phase_shift=s.precession_phase_shift,
         aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
         horizon=_horizon(s, bvals))
-    _check_start(s, kmax, bvals, *at_v0, ends.earlier_end(*events.addresses, y0, p))
+    check_start(s, kmax, bvals, *at_v0, ends.earlier_end(*events.addresses, y0, p))
     return System(rhs, events, p, y0, kmax, bvals)
 
 
@@ -252,7 +252,7 @@ def build_rows(o, b, parts, rows):
     (:func:`pnrotor.pn.system.start_rows`: ``evolve_many``): b holds their rows of
     :class:`~pnrotor.pn.settings.Binaries`, binary i from row rows[i] of the spin-independent ``parts``
     (:func:`population_parts`) → (right-hand side, events, parameter vectors P (n, P_SIZE), initial states Y0
-    (n, size), spin invariants (n, 9), start checks (n, 5): ``_check_start(s, kmax, invariants, *checks)`` raises
+    (n, size), spin invariants (n, 9), start checks (n, 5): ``check_start(s, kmax, invariants, *checks)`` raises
     for binary i what build_system would).  Bitwise build_system's numbers (tests/test_pn_coefficients.py)."""
     aligned = bool(b.aligned[0])
     rhs, events = _functions(aligned, o.precession)
@@ -277,10 +277,10 @@ def population_parts(s, X1, kappa1, kappa2, lambda1=0.0, lambda2=0.0):
                                        _omega_l(s), lambda1, lambda2)
 
 
-def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
+def check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
     """A ValueError naming f_ref and its bound if N, D, Ê′ or event 6 at v₀ say the inspiral has ended, or if one
     of them does at a lower v (``ended``, :func:`pnrotor.pn.ends.earlier_end`)."""
-    why = _ended_at(n0, d0, e0, peak0)
+    why = ended_at(n0, d0, e0, peak0)
     if why or ended:   # the bound: the first end on inspiral_end's grid or on the start check's, whichever is lower
         v_end = min(ends.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2, s.lambda1, s.lambda2),
                     ended or 1.0)
@@ -291,8 +291,8 @@ def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
                          f"(v = {v_end:.6g})")
 
 
-def _ended_at(n0, d0, e0, peak0):
-    """Why the inspiral has ended at v₀ by N, D, Ê′ and event 6 there, or None (:func:`_check_start`)."""
+def ended_at(n0, d0, e0, peak0):
+    """Why the inspiral has ended at v₀ by N, D, Ê′ and event 6 there, or None (:func:`check_start`)."""
     return ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
             else "dv/dt <= 0" if not n0 * d0 > 0.0
             else f"the denominator of dv/dt is {d0:.3g} <= {layout.DEN_EPS:g}, next to its pole" if not d0 > layout.DEN_EPS
@@ -340,9 +340,9 @@ def integrate_half(s, system, forward, t_eval, dense):
     (:func:`pnrotor.ode.dop853.run_core`)."""
     p, t_end, directions = half(s.v0, s.nu, s.v_min, system.p, forward)
     res = run_core(system.rhs, default_hook("after_step"), system.events, 0.0, system.y0, t_end, p,
-                   *_tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
+                   *tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
                    _NO_T_EVAL, OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, layout.N_EVENTS, directions,
-                   *_CONTROLLER)
+                   *CONTROLLER_ARGS)
     return res, termination(res.status, res.event_index, end_name(forward, s.f_max is not None), s.approximant)
 
 
@@ -353,7 +353,7 @@ def end_name(forward, f_max_given):
 
 
 @functools.lru_cache(maxsize=8)
-def _tolerances(n, atol, rtol):
+def tolerances(n, atol, rtol):
     """(atol, rtol) per component as the core takes them; cached, as the core only reads them."""
     return np.full(n, atol), np.full(n, rtol)
 
@@ -510,10 +510,10 @@ def check_inputs(m1, m2, chi1, chi2, f_ref, **options):
     before it says it is compiling and starts compiling (a cold cache is no reason to wait for an input error).
     Two checks need more and stay in ``evolve``: whether f_ref is past the end of the inspiral (the compiled set-up)
     and whether a uniform or per-orbit sampling fits in memory (the integrated span)."""
-    settings(m1, m2, chi1, chi2, f_ref, **{**_OPTIONS, **options})
+    settings(m1, m2, chi1, chi2, f_ref, **{**OPTIONS, **options})
 
 
-_OPTIONS = {name: parameter.default for name, parameter in inspect.signature(evolve).parameters.items()
+OPTIONS = {name: parameter.default for name, parameter in inspect.signature(evolve).parameters.items()
             if parameter.kind is inspect.Parameter.KEYWORD_ONLY}
 """evolve's keyword arguments and their defaults."""
 

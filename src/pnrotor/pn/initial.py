@@ -22,18 +22,18 @@ import numpy as np
 MTSUN_SI = 4.9254909476412675e-06
 """G M☉ / c³ in seconds (IAU 2015 nominal GM☉ = 1.3271244e20 m³/s², c = 299792458 m/s)."""
 
-_BOOLS = (bool, np.bool_)
+BOOLS = (bool, np.bool_)
 """Refused where a number is expected (float(True) would be 1.0)."""
-_TEXT = (str, bytes, bytearray)
+TEXT = (str, bytes, bytearray)
 """Refused where a number is expected too (float("30") would be 30.0): numbers only, as ``evolve_many`` takes them."""
 
 
-def _real(x):
+def real(x):
     """Whether x is a real number (Python's or numpy's), not a bool."""
-    return isinstance(x, numbers.Real) and not isinstance(x, _BOOLS)
+    return isinstance(x, numbers.Real) and not isinstance(x, BOOLS)
 
 
-def _finite(x):
+def finite(x):
     """Whether the real number x is finite as a float (an int beyond any float, 10**400, is not)."""
     try:
         return math.isfinite(x)
@@ -41,9 +41,9 @@ def _finite(x):
         return False
 
 
-def _integer(x):
+def integer(x):
     """Whether x is an integer (Python's or numpy's), not a bool."""
-    return isinstance(x, (int, np.integer)) and not isinstance(x, _BOOLS)
+    return isinstance(x, (int, np.integer)) and not isinstance(x, BOOLS)
 
 
 def in_unit(x, unit, name, what):
@@ -62,12 +62,12 @@ def in_unit(x, unit, name, what):
                          + (f" (not convertible to {unit})" if unit else "")) from None
 
 
-def _positive(x, unit, name, what):
+def positive(x, unit, name, what):
     """A float from a float (already in `unit`) or an astropy Quantity converted to `unit` (an astropy unit
     name); must be finite and > 0, else a ValueError "`name` must be a finite positive `what`"."""
     x = in_unit(x, unit, name, f"a finite positive {what}")
     try:
-        if isinstance(x, _BOOLS + _TEXT):
+        if isinstance(x, BOOLS + TEXT):
             raise TypeError
         x = float(x)
     except (TypeError, ValueError, OverflowError):   # OverflowError: an int beyond any float (10**400)
@@ -79,7 +79,7 @@ def _positive(x, unit, name, what):
 
 def solar_masses(m, name="mass"):
     """A mass in M☉ from a float (already M☉) or an astropy Quantity; must be finite and > 0."""
-    return _positive(m, "M_sun", name, "mass")
+    return positive(m, "M_sun", name, "mass")
 
 
 def hertz(f, name="frequency", allow_none=False):
@@ -88,12 +88,12 @@ def hertz(f, name="frequency", allow_none=False):
         if allow_none:
             return None
         raise ValueError(f"{name} is required")
-    return _positive(f, "Hz", name, "frequency in Hz")
+    return positive(f, "Hz", name, "frequency in Hz")
 
 
 def seconds(dt, name="time step"):
     """A time in seconds from a float or an astropy Quantity; must be finite and > 0."""
-    return _positive(dt, "s", name, "time in seconds")
+    return positive(dt, "s", name, "time in seconds")
 
 
 def total_mass_seconds(m1, m2):
@@ -126,7 +126,7 @@ def _vec3(a, name):
     """Three finite floats from a 3-vector (plain Python floats: cheaper than numpy for three numbers)."""
     try:
         x, y, z = a
-        if isinstance(x, _BOOLS) or isinstance(y, _BOOLS) or isinstance(z, _BOOLS):
+        if isinstance(x, BOOLS) or isinstance(y, BOOLS) or isinstance(z, BOOLS):
             raise TypeError
         x, y, z = float(x), float(y), float(z)
     except (TypeError, ValueError, OverflowError):

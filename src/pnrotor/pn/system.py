@@ -56,11 +56,11 @@ def make_parameters(X1, approximant, kmax, *, so_order, ss_order, kappa1=1.0, ka
     ``spin_tol``: how far |χᵢ|² may exceed 1 before events 3/4 end the run (:func:`pnrotor.pn.layout.spin_tolerance`).
     ``horizon``: {k: c} of the flux into the horizons F̂_H (:func:`pnrotor.pn.flux.horizon_flux`, aligned runs),
     added to the energy balance at first order (:func:`pnrotor.pn.vdot.add_horizon_flux`).
-    Everything but v_end, spin_tol and the stored series comes from :func:`_spin_independent_parts` (cached).
+    Everything but v_end, spin_tol and the stored series comes from :func:`cached_spin_independent_parts` (cached).
     :func:`start_rows` builds the same p for many binaries at once.
     """
     a = approximants.get(approximant)
-    head, N, D, Ep = _spin_independent_parts(
+    head, N, D, Ep = cached_spin_independent_parts(
         (X1, a, tuple(np.asarray(kmax).tolist()), so_order, ss_order, kappa1, kappa2,
          math.copysign(1.0, kappa1), math.copysign(1.0, kappa2), lambda1, lambda2, rotor, bool(phase_shift), omega_l))
     p = np.zeros(P_SIZE)
@@ -96,14 +96,14 @@ def start_rows(heads, N, D, Ep, rows, bases, fold, v_end, spin_tol, c_addr, jit_
 
 
 @functools.lru_cache(maxsize=64)
-def _spin_independent_parts(key):
+def cached_spin_independent_parts(key):
     """:func:`spin_independent_parts` of one binary, ``key`` = (X1, approximant (make_parameters gives its
     :class:`~pnrotor.approximants.Approximant`, so an entry registered anew under a name is not served from the
     cache), kmax as a tuple, so_order,
     ss_order, κ₁, κ₂, the signs of κ₁ and κ₂ (a κ of −0.0 gives other signed zeros), Λ₁, Λ₂, rotor, phase_shift,
     omega_l), as (p head, N, D, Ê′), kept in a small LRU cache (repeated runs of one binary, or of one mass
     ratio, skip its ~65 µs of Python; code that replaces a coefficient function must call
-    ``_spin_independent_parts.cache_clear()``).  The arrays are shared: make_parameters copies the head and only
+    ``cached_spin_independent_parts.cache_clear()``).  The arrays are shared: make_parameters copies the head and only
     reads the series."""
     X1, approximant, kmax, so_order, ss_order, kappa1, kappa2, _, _, lambda1, lambda2, rotor, phase_shift, omega_l = key
     p, N, D, Ep = spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_order, rotor,

@@ -36,7 +36,7 @@ from pnrotor import quaternion as q
 from pnrotor.history import short_repr
 from pnrotor.pn import sampling as _sampling
 from pnrotor.pn.evolve import Evolution
-from pnrotor.pn.initial import _integer, _real
+from pnrotor.pn.initial import integer, real
 from pnrotor.waveform import polarizations as _pol
 from pnrotor.waveform.amplitudes import modes_in_frame
 from pnrotor.waveform.distance import scale as _scale
@@ -52,9 +52,9 @@ ELL_MAX = 8
 
 def _megaparsecs(distance):
     """Mpc from a float (Mpc) or an astropy Quantity of length; ValueError naming ``distance``."""
-    from pnrotor.pn.initial import _positive
+    from pnrotor.pn.initial import positive
 
-    return _positive(distance, "Mpc", "distance", "distance in Mpc")
+    return positive(distance, "Mpc", "distance", "distance in Mpc")
 
 
 def _angle(value, name):
@@ -65,10 +65,10 @@ def _angle(value, name):
         if value.unit.physical_type != "angle":
             raise ValueError(f"{name} must be an angle (radians, or an astropy angle); got {value!r}")
         value = value.to_value(u.rad)
-    elif _real(value) and math.isfinite(value) and not -2.0 * math.pi <= value <= 2.0 * math.pi:
+    elif real(value) and math.isfinite(value) and not -2.0 * math.pi <= value <= 2.0 * math.pi:
         raise ValueError(f"{name} = {value!r} is outside [-2 pi, 2 pi]: angles are in radians ({value!r} degrees is "
                          f"{math.radians(value):.6g} rad; or pass an astropy angle, such as {value!r} * u.deg)")
-    if not (_real(value) and math.isfinite(value)):
+    if not (real(value) and math.isfinite(value)):
         raise ValueError(f"{name} must be a finite angle in radians (a number, or an astropy angle); got {value!r}")
     return float(value)
 
@@ -134,7 +134,7 @@ class Modes:
 
     def mode(self, ell, m):
         """h_ℓm, (N,) complex."""
-        if not (_integer(ell) and _integer(m) and 2 <= ell <= self.ell_max and abs(m) <= ell):
+        if not (integer(ell) and integer(m) and 2 <= ell <= self.ell_max and abs(m) <= ell):
             raise ValueError(f"mode (ell, m) = ({ell!r}, {m!r}) not in these modes: need integers "
                              f"2 <= ell <= {self.ell_max}, |m| <= ell")
         return self.data[mode_index(ell, m)]
@@ -210,10 +210,10 @@ class Modes:
 def check_arguments(ell_max, amplitude_order, distance=None):
     """:func:`modes`' options checked → (ell_max, 2 × amplitude_order, distance in Mpc or None); a ValueError
     naming the first bad one (callers check before computing a run)."""
-    if not (_integer(ell_max) and 2 <= ell_max <= ELL_MAX):
+    if not (integer(ell_max) and 2 <= ell_max <= ELL_MAX):
         raise ValueError(f"ell_max must be an integer from 2 to {ELL_MAX}; got {ell_max!r}")
     try:
-        order2 = 2.0 * float(amplitude_order) if _real(amplitude_order) else math.nan   # no str, bytes or bools
+        order2 = 2.0 * float(amplitude_order) if real(amplitude_order) else math.nan   # no str, bytes or bools
     except OverflowError:   # an int beyond any float (10**400)
         order2 = math.nan
     if not order2 in range(9):
@@ -239,9 +239,9 @@ def tides_of(inputs, tidal_order):
     """``tides`` of :func:`pnrotor.waveform.amplitudes.modes_in_frame` for a run's inputs: (Λ₁, Λ₂, the largest
     power of v of a tidal term), to ``tidal_order`` (None: the run's own; 0, 5 or 6), none without deformabilities
     (or in a file written before them)."""
-    from pnrotor.pn.settings import _tidal_order
+    from pnrotor.pn.settings import check_tidal_order
 
-    order = inputs.get("tidal_order", 0.0) if tidal_order is None else _tidal_order(tidal_order)
+    order = inputs.get("tidal_order", 0.0) if tidal_order is None else check_tidal_order(tidal_order)
     lambdas = (float(inputs.get("lambda1", 0.0)), float(inputs.get("lambda2", 0.0)))
     return (*lambdas, int(2 * order)) if order and any(lambdas) else (0.0, 0.0, -1)
 
