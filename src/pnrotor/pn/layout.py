@@ -5,6 +5,7 @@ vector is built by :mod:`pnrotor.pn.system`, the spin-independent part by the co
 :mod:`pnrotor.pn.energy`, :mod:`pnrotor.pn.flux` and :mod:`pnrotor.pn.precession`.
 """
 
+from .precession import SPIN_ORBIT_ORDERS, SPIN_SPIN
 from .series import SERIES_SLOTS
 
 # state layout
@@ -32,24 +33,24 @@ P_ROTOR = 5      # 0 coprecessing, 1 orbital
 P_SHIFT = 6      # 1: apply the precession phase shift
 P_W1 = 7         # phase-shift weights w₁, w₂
 P_W2 = 8
-P_SO1 = 9        # σ₀, σ₂, σ₄ of body 1 (zeroed when truncated)
-P_SO2 = 12       # σ₀, σ₂, σ₄ of body 2
-P_SS2_1 = 15     # 2PN spin-spin: c_j, c_j⊥, c_i⊥ for body 1
-P_SS2_2 = 18     # ... body 2
-P_SS3_1 = 21     # 3PN spin-spin: c_j, c_j⊥, c_i⊥ for body 1
-P_SS3_2 = 24     # ... body 2
-P_L2 = 27        # |L| = (ν/v)(1 + L₂v² + L₄v⁴)
-P_L4 = 28
-P_SPINTOL = 29   # |χ|² may exceed 1 by this much before event 3/4 fires
-P_DEN_EPS = 30   # event 5 fires when the denominator D of v̇ falls to this value
-# instantaneous precession (rhs_precessing_instantaneous only)
-P_VARPI1 = 31    # w₀, w₂, w₄ of ϖ for body 1 (zeroed when truncated)
-P_VARPI2 = 34    # ... body 2
-P_ISS1 = 37      # body 1: 2PN a_j, a_jn, a_in; 3PN b_j, b_jn, b_jλ, b_in, b_iλ (zeroed when truncated)
-P_ISS2 = 45      # ... body 2
-P_OMEGA_L = 53   # 0: Ω_ℓ from −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| (LALSuite); 1: its spin-orbit part from ⟨ϖ n̂⟩ (Bohé+ 2013)
+# the precession series (pnrotor.pn.precession), each term zeroed when truncated
+N_SO = len(SPIN_ORBIT_ORDERS)   # terms of the spin-orbit series in v²
+N_SS = len(SPIN_SPIN)           # terms of the spin-spin series (v⁶, v⁸, ...)
+P_SO1 = 9                       # σ₀, σ₂, σ₄ of body 1
+P_SO2 = P_SO1 + N_SO            # ... body 2
+P_SS1 = P_SO2 + N_SO            # spin-spin of body 1: the series of c_j, then of c_j⊥, then of c_i⊥
+P_SS2 = P_SS1 + 3 * N_SS        # ... body 2
+P_L = P_SS2 + 3 * N_SS          # |L| = (ν/v)(1 + v²(L₂ + L₄v²))
+P_SPINTOL = P_L + N_SO - 1      # |χ|² may exceed 1 by this much before event 3/4 fires
+P_DEN_EPS = P_SPINTOL + 1       # event 5 fires when the denominator D of v̇ falls to this value
+P_VARPI1 = P_DEN_EPS + 1        # w₀, w₂, w₄ of ϖ for body 1 ('averaged_varpi', 'instantaneous')
+P_VARPI2 = P_VARPI1 + N_SO      # ... body 2
+# instantaneous spin-spin precession (rhs_precessing_instantaneous only)
+P_ISS1 = P_VARPI2 + N_SO        # body 1: 2PN a_j, a_jn, a_in; 3PN b_j, b_jn, b_jλ, b_in, b_iλ (zeroed when truncated)
+P_ISS2 = P_ISS1 + 8             # ... body 2
+P_OMEGA_L = P_ISS2 + 8          # 0: Ω_ℓ from −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| (LALSuite); 1: its spin-orbit part from ⟨ϖ n̂⟩ (Bohé+)
 # the series N, D, Ê′, each a header and its coefficients (series.fold_and_store)
-P_NUM = 54
+P_NUM = P_OMEGA_L + 1
 P_DEN = P_NUM + SERIES_SLOTS
 P_EP = P_DEN + SERIES_SLOTS
 P_SIZE = P_EP + SERIES_SLOTS

@@ -78,8 +78,8 @@ import numpy as np
 from numba import njit
 
 from .layout import (EV_ENERGY, EV_POLE, EV_SPIN1, EV_SPIN2, EV_V_END, EV_VDOT, EV_VDOT_PEAK, P_DEN, P_DEN_EPS, P_EP,
-                     P_ISS1, P_ISS2, P_L2, P_L4, P_NU, P_NUM, P_OMEGA_L, P_ROTOR, P_SHIFT, P_SO1, P_SO2, P_SPINTOL,
-                     P_SS2_1, P_SS2_2, P_SS3_1, P_SS3_2, P_VARPI1, P_VARPI2, P_VDOT0, P_VEND, P_W1, P_W2, P_X1, P_X2,
+                     N_SS, P_ISS1, P_ISS2, P_L, P_NU, P_NUM, P_OMEGA_L, P_ROTOR, P_SHIFT, P_SO1, P_SO2, P_SPINTOL,
+                     P_SS1, P_SS2, P_VARPI1, P_VARPI2, P_VDOT0, P_VEND, P_W1, P_W2, P_X1, P_X2,
                      Y_PHI, Y_R, Y_V, YA_PHI, YA_V)
 from .series import eval_series
 
@@ -149,20 +149,21 @@ def rhs_precessing(t, y, p, dydt):
     p1x, p1y, p1z = c1x - a1 * lx, c1y - a1 * ly, c1z - a1 * lz
     p2x, p2y, p2z = c2x - a2 * lx, c2y - a2 * ly, c2z - a2 * lz
 
-    # Ω₁ = v⁵(σ₀+σ₂v²+σ₄v⁴) ℓ̂ + v⁶[c_j χ₂ + c_j⊥ χ₂⊥ + c_i⊥ χ₁⊥] + v⁸[...]   (precession.py)
+    # Ω₁ = v⁵(σ₀+σ₂v²+σ₄v⁴) ℓ̂ + v⁶[c_j χ₂ + c_j⊥ χ₂⊥ + c_i⊥ χ₁⊥] + v⁸[...]: the series of precession.py, written out
+    # (a loop over their terms changes how LLVM fuses products and sums into FMAs, and so the last bits)
     sig1 = p[P_SO1] + v2 * (p[P_SO1 + 1] + v2 * p[P_SO1 + 2])
     so1 = v5 * sig1
-    kj1 = v6 * p[P_SS2_1] + v8 * p[P_SS3_1]
-    kjp1 = v6 * p[P_SS2_1 + 1] + v8 * p[P_SS3_1 + 1]
-    kip1 = v6 * p[P_SS2_1 + 2] + v8 * p[P_SS3_1 + 2]
+    kj1 = v6 * p[P_SS1] + v8 * p[P_SS1 + 1]
+    kjp1 = v6 * p[P_SS1 + N_SS] + v8 * p[P_SS1 + N_SS + 1]
+    kip1 = v6 * p[P_SS1 + 2 * N_SS] + v8 * p[P_SS1 + 2 * N_SS + 1]
     o1x = so1 * lx + kj1 * c2x + kjp1 * p2x + kip1 * p1x
     o1y = so1 * ly + kj1 * c2y + kjp1 * p2y + kip1 * p1y
     o1z = so1 * lz + kj1 * c2z + kjp1 * p2z + kip1 * p1z
     sig2 = p[P_SO2] + v2 * (p[P_SO2 + 1] + v2 * p[P_SO2 + 2])
     so2 = v5 * sig2
-    kj2 = v6 * p[P_SS2_2] + v8 * p[P_SS3_2]
-    kjp2 = v6 * p[P_SS2_2 + 1] + v8 * p[P_SS3_2 + 1]
-    kip2 = v6 * p[P_SS2_2 + 2] + v8 * p[P_SS3_2 + 2]
+    kj2 = v6 * p[P_SS2] + v8 * p[P_SS2 + 1]
+    kjp2 = v6 * p[P_SS2 + N_SS] + v8 * p[P_SS2 + N_SS + 1]
+    kip2 = v6 * p[P_SS2 + 2 * N_SS] + v8 * p[P_SS2 + 2 * N_SS + 1]
     o2x = so2 * lx + kj2 * c1x + kjp2 * p1x + kip2 * p2x
     o2y = so2 * ly + kj2 * c1y + kjp2 * p1y + kip2 * p2y
     o2z = so2 * lz + kj2 * c1z + kjp2 * p1z + kip2 * p2z
@@ -185,7 +186,7 @@ def rhs_precessing(t, y, p, dydt):
     sx = q1 * ex1 + q2 * ex2
     sy = q1 * ey1 + q2 * ey2
     sz = q1 * ez1 + q2 * ez2
-    inv_vL = 1.0 / (p[P_NU] * (1.0 + v2 * (p[P_L2] + v2 * p[P_L4])))   # 1/(v|L|)
+    inv_vL = 1.0 / (p[P_NU] * (1.0 + v2 * (p[P_L] + v2 * p[P_L + 1])))   # 1/(v|L|)
     inv_L = v * inv_vL
     if p[P_OMEGA_L] == 0.0:
         u1 = q1 * sig1 * inv_vL

@@ -20,11 +20,11 @@ from . import vdot
 from .ends import earlier_end
 from .energy import energy_series
 from .flux import flux_series
-from .layout import (DEN_EPS, P_DEN, P_DEN_EPS, P_EP, P_ISS1, P_ISS2, P_L2, P_L4, P_NU, P_NUM, P_OMEGA_L, P_ROTOR,
-                     P_SHIFT, P_SIZE, P_SO1, P_SO2, P_SPINTOL, P_SS2_1, P_SS2_2, P_SS3_1, P_SS3_2, P_VARPI1, P_VARPI2,
-                     P_VDOT0, P_VEND, P_W1, P_X1, P_X2, SPIN_TOL, Y_V)
-from .precession import (angular_momentum_coefficients, phase_shift_weights, precession_terms, spin_orbit_precession,
-                         spin_spin_precession_2pn, spin_spin_precession_3pn, spin_spin_precession_3pn_instantaneous,
+from .layout import (DEN_EPS, N_SS, P_DEN, P_DEN_EPS, P_EP, P_ISS1, P_ISS2, P_L, P_NU, P_NUM, P_OMEGA_L, P_ROTOR,
+                     P_SHIFT, P_SIZE, P_SO1, P_SO2, P_SPINTOL, P_SS1, P_SS2, P_VARPI1, P_VARPI2, P_VDOT0, P_VEND, P_W1,
+                     P_X1, P_X2, SPIN_TOL, Y_V)
+from .precession import (SPIN_ORBIT_ORDERS, SPIN_SPIN, angular_momentum_coefficients, phase_shift_weights,
+                         precession_terms, spin_orbit_precession, spin_spin_precession_3pn_instantaneous, truncated,
                          varpi_coefficients)
 from .rhs import vdot_peak
 from .series import eval_at, fold_and_store, shape_of, v_derivative
@@ -146,21 +146,20 @@ def spin_independent_parts(X1, kappa1, kappa2, approximant, kmax, so_order, ss_o
     p[P_OMEGA_L] = 1.0 if omega_l == "varpi" else 0.0
     put(P_W1, phase_shift_weights(X1, X2))
     inc = precession_terms(so_order, ss_order)
-    keep_so = (inc["so_lo"], inc["so_nlo"], inc["so_nnlo"])
-    for so, ss2, ss3, w, iss, (Xi, Xj, ki) in ((P_SO1, P_SS2_1, P_SS3_1, P_VARPI1, P_ISS1, (X1, X2, kappa1)),
-                                                (P_SO2, P_SS2_2, P_SS3_2, P_VARPI2, P_ISS2, (X2, X1, kappa2))):
-        put(so, [c if keep else 0.0 for c, keep in zip(spin_orbit_precession(Xi, Xj), keep_so)])
-        put(w, [c if keep else 0.0 for c, keep in zip(varpi_coefficients(Xi, Xj), keep_so)])
+    for so, ss, w, iss, (Xi, Xj, ki) in ((P_SO1, P_SS1, P_VARPI1, P_ISS1, (X1, X2, kappa1)),
+                                          (P_SO2, P_SS2, P_VARPI2, P_ISS2, (X2, X1, kappa2))):
+        put(so, truncated(spin_orbit_precession(Xi, Xj), SPIN_ORBIT_ORDERS, so_order))
+        put(w, truncated(varpi_coefficients(Xi, Xj), SPIN_ORBIT_ORDERS, so_order))
+        for k, (order, coefficients) in enumerate(SPIN_SPIN):   # the series of c_j, of c_j⊥ and of c_i⊥
+            if order <= ss_order:
+                for c, value in enumerate(coefficients(Xi, Xj, ki)):
+                    p[ss + c * N_SS + k] = value
         if inc["ss_2pn"]:
-            put(ss2, spin_spin_precession_2pn(Xi, Xj, ki))
             # instantaneous Kidder/Racine: Ωᵢ ∋ v⁶[−Xⱼ²χⱼ + 3Xⱼ²(n̂·χⱼ)n̂ + 3νκᵢ(n̂·χᵢ)n̂]
             put(iss, (-(Xj * Xj), 3.0 * (Xj * Xj), 3.0 * nu * ki))
         if inc["ss_3pn"]:
-            put(ss3, spin_spin_precession_3pn(Xi, Xj, ki))
             put(iss + 3, spin_spin_precession_3pn_instantaneous(Xi, Xj, ki))
-    L2, L4 = angular_momentum_coefficients(nu)
-    p[P_L2] = L2 if inc["so_nlo"] else 0.0
-    p[P_L4] = L4 if inc["so_nnlo"] else 0.0
+    put(P_L, truncated(angular_momentum_coefficients(nu), SPIN_ORBIT_ORDERS[1:], so_order))
     p[P_DEN_EPS] = DEN_EPS
     E, F = energy_series(X1, kappa1, kappa2, lambda1, lambda2), flux_series(X1, kappa1, kappa2, lambda1, lambda2)
     kmax, at = np.array(kmax, dtype=np.int64), vdot.vdot_addresses(a)
