@@ -487,7 +487,7 @@ def test_output_kernel_matches_the_integrators_dense_output():
     y0 = np.concatenate(([0.25], [0.5, 0.1, 0.3], [0.0, 0.4, -0.2], [1.0, 0.0, 0.0, 0.0], [0.0]))
     r = dop853(rhs.rhs_precessing, 0.0, y0, 3000.0, 1e-12, args=p, dense=True)
     tq = np.linspace(0.0, 3000.0, 777)
-    hist = ev._allocate_history(tq.size)
+    hist = ev.allocate_history(tq.size)
     ev.fill_history(ev.MODE_ORBITAL, r.dense.seg_t, r.dense.seg_h, r.dense.coef, tq, False, ev.NO_Y,
                      np.array([1.0, 0, 0, 0]), Z, np.zeros(3), np.zeros(3), 0, *hist)
     Y = r.dense(tq)
