@@ -19,11 +19,19 @@ Each batch runs
   process: reading the CSV, evolving, writing the batch file), which shows what a user gets.
 
 Timings are medians over interleaved rounds (every configuration once per round), which is robust on a
-shared machine. Apart: the start-up of a pool alone (1 and 2 workers, until each has loaded the PN code
+shared machine.
+
+``--durability`` (alone: ``--durability --workloads bbh-1/4096 --contexts``) times what keeping finished runs
+durable costs, for the Δt-sampled workload: ``pnrotor.batch.run`` (``--jobs 1`` and ``2``; every run added to the
+batch file being built as it finishes, its bytes written once, io.journal) against a same-run baseline that
+computes the same runs (in this process, or on a pool of 2) and writes the same bytes once, into one batch file with
+`pnrotor.hdf5.batch` (fsynced), and prints the ratio; beside them two other ways to keep finished runs: a part file
+per run then an HDF5 copy of each into the batch file (what pnrotor did before), and a part file per run indexed by
+a batch file of external links (``h5py.ExternalLink``), with the time to read every run back from each file. Apart: the start-up of a pool alone (1 and 2 workers, until each has loaded the PN code
 and answered an empty task), and for forkserver also that of the first pool of a fresh process (which
 starts the server and loads the PN code in it).
 
-    python benchmarks/bench_batch.py [--runs 40] [--rounds 5] [--contexts fork forkserver spawn]
+    python benchmarks/bench_batch.py [--runs 40] [--rounds 5] [--contexts fork forkserver spawn] [--durability]
 """
 
 import argparse
@@ -87,6 +95,92 @@ def time_batch(tasks, mode, jobs=1, context=None):
     return elapsed, results
 
 
+def durability(tasks, csv_path, folder, rounds):
+    """Wall times of a batch and of ways to write its runs (module docstring), interleaved, medians."""
+    import shutil
+
+    import h5py
+
+    from pnrotor import batch, hdf5
+
+    names = [row.name for row in batch.read_batch(csv_path, {})]   # the batch's names of its rows
+    out = os.path.join(folder, "out.h5")
+
+    def computed(jobs):
+        results = list(results_serial(tasks) if jobs == 1 else results_pool(tasks, jobs))
+        return {names[i]: run for i, _, run in results}
+
+    def once(jobs):
+        with hdf5.batch(out, overwrite=True) as runs:
+            for name, run in sorted(computed(jobs).items()):
+                runs.add(name, run)
+
+    def parts_then_copy():
+        parts = os.path.join(folder, "parts")
+        os.makedirs(parts, exist_ok=True)
+        for name, run in computed(1).items():
+            with hdf5.batch(os.path.join(parts, name + ".h5"), overwrite=True, durable=False) as part:
+                part.add(name, run)
+        with hdf5.batch(out, overwrite=True) as runs:
+            for name in sorted(names):
+                runs.copy_from(os.path.join(parts, name + ".h5"), name, verify=False)
+        shutil.rmtree(parts)
+
+    def external_links():
+        parts = os.path.join(folder, "runs")
+        shutil.rmtree(parts, ignore_errors=True)
+        os.makedirs(parts)
+        for name, run in computed(1).items():
+            with hdf5.batch(os.path.join(parts, name + ".h5"), overwrite=True) as part:   # each fsynced
+                part.add(name, run)
+        with h5py.File(out, "w") as index:
+            for name in sorted(names):
+                index[name] = h5py.ExternalLink(os.path.join("runs", name + ".h5"), name)
+        fd = os.open(out, os.O_RDONLY)
+        os.fsync(fd)
+        os.close(fd)
+
+    def read_all():
+        with h5py.File(out, "r") as f:
+            for name in sorted(names):
+                for dataset in ("t", "v", "R", "chi1"):
+                    f[name][dataset][...]
+
+    def timed(function):
+        start = time.perf_counter()
+        function()
+        return time.perf_counter() - start
+
+    ways = {"batch.run --jobs 1 (journaled)": lambda: batch.run(csv_path, out, jobs=1, overwrite=True),
+            "baseline: serial + write once": lambda: once(1),
+            "batch.run --jobs 2 (journaled)": lambda: batch.run(csv_path, out, jobs=2, overwrite=True),
+            "baseline: pool 2 + write once": lambda: once(2),
+            "part files + HDF5 copy (before)": parts_then_copy,
+            "part files + external links": external_links}
+    times = {way: [] for way in ways}
+    reads = {"one file": [], "external links": []}
+    for _ in range(rounds):
+        for way, function in ways.items():
+            times[way].append(timed(function))
+            if way.startswith("batch.run --jobs 2"):
+                reads["one file"].append(timed(read_all))
+            elif way.startswith("part files + external"):
+                reads["external links"].append(timed(read_all))
+    samples = sum(len(run) for run in computed(1).values())
+    print(f"\ndurability: {len(tasks)} runs sampled at 1/4096 s, {samples} samples, {rounds} interleaved rounds, "
+          "medians (all rounds, s)")
+    median = {way: statistics.median(values) for way, values in times.items()}
+    for way, values in times.items():
+        print(f"  {way:<34} {median[way]:>7.3f} s   " + " ".join(f"{t:.3f}" for t in values))
+    for jobs, baseline in ((1, "serial"), (2, "pool 2")):
+        ratio = median[f"batch.run --jobs {jobs} (journaled)"] / median[f"baseline: {baseline} + write once"]
+        print(f"  --jobs {jobs}: batch / writing its bytes once = {ratio:.2f}")
+    for what, values in reads.items():
+        print(f"  reading t, v, R, chi1 of every run, {what:<15} {statistics.median(values):.3f} s   "
+              + " ".join(f"{t:.3f}" for t in values))
+    shutil.rmtree(os.path.join(folder, "runs"), ignore_errors=True)
+
+
 def time_startup(jobs, context):
     """Seconds from creating a pool of `jobs` workers until each has loaded the PN code and answered."""
     start = time.perf_counter()
@@ -98,8 +192,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=40)
     parser.add_argument("--rounds", type=int, default=5)
-    parser.add_argument("--contexts", nargs="+", default=["fork", "forkserver", "spawn"])
+    parser.add_argument("--contexts", nargs="*", default=["fork", "forkserver", "spawn"])
     parser.add_argument("--workloads", nargs="+", default=list(WORKLOADS), choices=list(WORKLOADS))
+    parser.add_argument("--durability", action="store_true", help="also time the cost of durable batches")
     args = parser.parse_args()
     print(f"{os.cpu_count()} cores, Python {sys.version.split()[0]}; {args.runs} precessing binaries from 20 Hz per "
           f"batch, {args.rounds} interleaved rounds, medians; CLI default start method: {start_method()}")
@@ -109,7 +204,7 @@ def main():
 
     print(f"import of the PN code in this process: {time.perf_counter() - start:.2f} s")
     configs = [("serial", 1, None)] + [("pool", jobs, c) for c in args.contexts for jobs in (1, 2)]
-    configs += [("cli", 1, None), ("cli", 2, None)]
+    configs += [("cli", 1, None), ("cli", 2, None)] if args.contexts else []
     folder = tempfile.mkdtemp(prefix="bench_batch_")
     for workload in args.workloads:
         m_low, m_high, sampling = WORKLOADS[workload]
@@ -120,6 +215,8 @@ def main():
         _, reference = time_batch(tasks, "serial")
         samples = sum(len(r) for _, _, r in reference)
         evolve_s = sum(r.stats["wall_time_s"] for _, _, r in reference)
+        if args.durability and not isinstance(sampling, str):
+            durability(tasks, csv_path, folder, args.rounds)
         times = {config: [] for config in configs}
         for _ in range(args.rounds):
             for config in configs:
@@ -147,8 +244,9 @@ def main():
         for context in args.contexts:
             one, two = (statistics.median(times[("pool", j, context)]) for j in (1, 2))
             print(f"  {context}: 2 workers / 1 worker speed-up {one / two:.2f}x")
-        one, two = (statistics.median(times[("cli", j, None)]) for j in (1, 2))
-        print(f"  CLI: --jobs 2 / --jobs 1 speed-up {one / two:.2f}x")
+        if ("cli", 1, None) in times:
+            one, two = (statistics.median(times[("cli", j, None)]) for j in (1, 2))
+            print(f"  CLI: --jobs 2 / --jobs 1 speed-up {one / two:.2f}x")
 
     print("\nworker start-up (pool created → every worker has loaded the PN code and answered), medians:")
     startups = {(c, j): [] for c in args.contexts for j in (1, 2)}

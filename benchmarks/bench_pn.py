@@ -13,9 +13,11 @@ precessing, and an 8 + 1.4 M☉ NSBH with Λ₂ = 600) both codes produce the or
 
 Then the cost of each of pnrotor's physics options against the same run without it, interleaved (``--options``
 only, or skipped with ``--no-options``; orbits with sampling='final', so that the cost of ~10⁵ output samples,
-whose allocation varies by ms from call to call on a shared machine, is not measured): the tides of that BNS, horizon absorption on a q = 10 binary with
-χ₁ = 0.9 along ℓ̂ (and the orbital phase it adds to v = 0.3 and 0.4), the modes of the BNS at amplitude order 4
-against 3.5 and with the memory against without.
+whose allocation varies by ms from call to call on a shared machine, is not measured): the tides of that BNS, horizon
+absorption on a q = 10 binary with χ₁ = 0.9 along ℓ̂ (the run without it on the aligned state, with it on the
+precessing one, as evolve chooses) and tilted 60° from it (precessing either way), and the orbital phase it adds to
+v = 0.3, 0.4 and the end of the inspiral with the spin's and mass's change there, the modes of the BNS at amplitude
+order 4 against 3.5 and with the memory against without.
 
 Timings are medians over interleaved rounds (LAL and pnrotor alternate case by case), which is robust on
 a shared machine.  Each timing includes freeing that call's own output and nothing else (freeing a
@@ -41,6 +43,8 @@ import tempfile
 import textwrap
 import time
 
+import numpy as np
+
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
 from pn_cases import CASES  # noqa: E402  (the cases of tests/test_pn_lal.py)
 
@@ -59,7 +63,9 @@ def _median_ms(samples):
 
 def option_costs(rounds):
     """Each physics option's cost: the run (or its modes) with the option against the same without it, interleaved
-    round by round → {option: (median ms without, median ms with, their range over rounds)}."""
+    round by round (a call of < 20 ms as the mean of a loop of ~20 ms, the same count with and without) → {option:
+    (median ms without, its range, median ms with, its range, the median of the rounds' ratios with/without, their
+    range)} (ranges (min, max) over the rounds)."""
     from pnrotor.pn import evolve, lalsuite_orders
     from pnrotor.pn.system import cached_spin_independent_parts
     from pnrotor.waveform.modes import modes
@@ -68,43 +74,62 @@ def option_costs(rounds):
     orders = lalsuite_orders("T4")
     base = dict(approximant="T4", sampling="final", **orders)   # the model's cost: set-up and integration
     run = evolve(m1, m2, c1, c2, f, **{**base, "sampling": DT})
-    bh = (50.0, 5.0, [0, 0, 0.9], [0, 0, 0], 20.0)
+    bh, tilted = ((50.0, 5.0, HORIZON_SPINS[name], [0, 0, 0], 20.0) for name in ("aligned", "tilted 60 deg"))
     pairs = {
         "tides (BNS from 40 Hz, Λ = 350, 820; evolve)": (
             lambda: evolve(m1, m2, c1, c2, f, **base),
             lambda: evolve(m1, m2, c1, c2, f, lambda1=lambdas[0], lambda2=lambdas[1], **base)),
         "horizon absorption (50 + 5 Msun, chi1 = 0.9 along l, 20 Hz)": (
             lambda: evolve(*bh, **base), lambda: evolve(*bh, horizon_absorption=True, **base)),
+        "horizon absorption (50 + 5 Msun, chi1 = 0.9 tilted 60 deg, 20 Hz)": (
+            lambda: evolve(*tilted, **base), lambda: evolve(*tilted, horizon_absorption=True, **base)),
         "amplitude order 4 against 3.5 (modes, l <= 8, the BNS)": (
             lambda: modes(run, 8, 3.5), lambda: modes(run, 8, 4.0)),
         "memory (modes, l <= 8, the BNS)": (
             lambda: modes(run, 8, 3.5), lambda: modes(run, 8, 3.5, memory=True)),
     }
     times = {name: ([], []) for name in pairs}
-    for name, (off, on) in pairs.items():   # warm up
-        off(), on()
+    repeats = {}
+    for name, (off, on) in pairs.items():   # warm up; calls of < 20 ms are timed in a loop of ~20 ms
+        on()
+        t = time.perf_counter()
+        off()
+        repeats[name] = max(1, round(0.02 / (time.perf_counter() - t)))
     for _ in range(rounds):
         for name, (off, on) in pairs.items():
             for fn, out in zip((off, on), times[name]):
-                cached_spin_independent_parts.cache_clear()
                 t = time.perf_counter()
-                fn()
-                out.append(time.perf_counter() - t)
-    return {name: (_median_ms(a), _median_ms(b), (1e3 * min(b), 1e3 * max(b))) for name, (a, b) in times.items()}
+                for _ in range(repeats[name]):
+                    cached_spin_independent_parts.cache_clear()
+                    fn()
+                out.append((time.perf_counter() - t) / repeats[name])
+    span = lambda x: (min(x), max(x))  # noqa: E731
+    return {name: (_median_ms(a), span([1e3 * x for x in a]), _median_ms(b), span([1e3 * x for x in b]),
+                   statistics.median([y / x for x, y in zip(a, b)]), span([y / x for x, y in zip(a, b)]))
+            for name, (a, b) in times.items()}
+
+
+HORIZON_SPINS = {"aligned": [0.0, 0.0, 0.9], "tilted 60 deg": [0.9 * 3 ** 0.5 / 2, 0.0, 0.45]}
+"""χ₁ of the q = 10 binaries of horizon absorption's cost and dephasing: 0.9 along ℓ̂ = ẑ and tilted 60° from it."""
 
 
 def horizon_dephasing():
-    """The orbital phase horizon absorption adds to the q = 10 binary of :func:`option_costs` (χ₁ = 0.9 along ℓ̂,
-    T4 at LAL's orders) from 20 Hz to the GW frequencies of v = 0.3 and 0.4 → {v: ΔΦ in rad}."""
+    """What horizon absorption does to the q = 10 binaries of :func:`option_costs` (χ₁ = 0.9 along ℓ̂ and tilted 60°,
+    T4 at LAL's orders) from 20 Hz to the GW frequencies of v = 0.3 and 0.4 and to the end of the inspiral (each run
+    to its own end) → {spin: {target: (ΔΦ in rad, Δ|χ₁|, Δm₁ in M☉, v at the end with the option)}}: the orbital
+    phase it adds, the change of the hole's spin magnitude and mass."""
     from pnrotor.pn import evolve, lalsuite_orders
     from pnrotor.pn.initial import frequency_from_v, total_mass_seconds
 
     out = {}
-    for v in (0.3, 0.4):
-        f_max = frequency_from_v(v, total_mass_seconds(50.0, 5.0))
-        phases = [evolve(50.0, 5.0, [0, 0, 0.9], [0, 0, 0], 20.0, f_max=f_max, sampling="final",
-                         horizon_absorption=h, **lalsuite_orders("T4")).Phi[-1] for h in (False, True)]
-        out[v] = phases[1] - phases[0]
+    for name, chi1 in HORIZON_SPINS.items():
+        out[name] = {}
+        for v in (0.3, 0.4, "end"):
+            f_max = None if v == "end" else frequency_from_v(v, total_mass_seconds(50.0, 5.0))
+            off, on = (evolve(50.0, 5.0, chi1, [0, 0, 0], 20.0, f_max=f_max, sampling="final", horizon_absorption=h,
+                              **lalsuite_orders("T4")) for h in (False, True))
+            out[name][v] = (on.Phi[-1] - off.Phi[-1], float(np.linalg.norm(on.chi1[-1]) - 0.9),
+                            on.stats["m1_final_Msun"] - 50.0, float(on.v[-1]))
     return out
 
 
@@ -209,12 +234,17 @@ def main():
 
     if not args.no_options:
         costs = option_costs(args.rounds)
-        print(f"\nCost of the physics options: median of {args.rounds} interleaved rounds (ms; range with it)")
-        for name, (off, on, (lo, hi)) in costs.items():
-            print(f"  {name:58s} without {off:8.2f}  with {on:8.2f} ({lo:.2f}-{hi:.2f})  ratio {on / off:5.2f}")
+        print(f"\nCost of the physics options: median of {args.rounds} interleaved rounds (ms, range over the rounds; "
+              "ratio: median of the rounds' with/without, range)")
+        for name, (off, (a, b), on, (c, d), ratio, (lo, hi)) in costs.items():
+            print(f"  {name:66s} without {off:8.2f} ({a:.2f}-{b:.2f})  with {on:8.2f} ({c:.2f}-{d:.2f})  "
+                  f"ratio {ratio:5.2f} ({lo:.2f}-{hi:.2f})")
         dephasing = horizon_dephasing()
-        print("  horizon absorption's orbital dephasing, 50 + 5 Msun, chi1 = 0.9 along l, from 20 Hz: "
-              + ", ".join(f"{phase:+.4f} rad to v = {v}" for v, phase in dephasing.items()))
+        for name, by_v in dephasing.items():
+            print(f"  horizon absorption, 50 + 5 Msun, chi1 = 0.9 {name}, from 20 Hz: orbital phase "
+                  + ", ".join(f"{phase:+.4f} rad to v = {v}" for v, (phase, *_) in by_v.items() if v != "end")
+                  + ", {:+.4f} rad to the end (v = {:.4f}); there |chi1| {:+.3e}, m1 {:+.3e} Msun".format(
+                      by_v["end"][0], by_v["end"][3], *by_v["end"][1:3]))
         results["options"] = costs
         results["horizon_dephasing"] = dephasing
     if not args.no_compile:

@@ -2,8 +2,9 @@
 full disks, racing writers and lost Dask workers.
 
 * batches: ``pnrotor evolve --batch`` of ``--rows`` binaries, killed with SIGKILL, SIGTERM or SIGINT at a
-  random moment, then completed with ``--resume``: how many finished runs the kill kept (one part file each), whether
-  the resumed file equals an uninterrupted batch bitwise, and worker processes left alive afterwards;
+  random moment, then completed with ``--resume``: how many finished runs the kill kept (in the batch file being
+  built in OUT.parts), whether the resumed file equals an uninterrupted batch bitwise, and worker processes left
+  alive afterwards;
 * single runs: ``pnrotor evolve`` of a BNS sampled at 1/4096 s (a ~200 MB file), signalled at a random
   moment of its write: temporary files left behind, the target's state (absent, or complete and readable);
 * byte flips: ``--flips`` single-bit flips at random places of files of a precessing 30 + 10 M☉ run
@@ -82,6 +83,17 @@ def same_file(a, b):
     return True
 
 
+def kept_runs(out, rows):
+    """Runs an interrupted batch kept: those of the batch file being built in OUT.parts (after completing or undoing
+    what the kill interrupted, as --resume does), all rows if it finished, else none."""
+    from pnrotor import hdf5
+
+    parts = out.with_name(out.name + ".parts")
+    if (parts / "runs.journal").exists():
+        return len(hdf5.Journaled(parts / "runs.h5", parts / "runs.journal").names())
+    return rows if out.exists() else 0
+
+
 def batches(folder, args, rng):
     csv = folder / "t.csv"
     table(csv, args.rows)
@@ -105,8 +117,7 @@ def batches(folder, args, rng):
             process.wait(timeout=60)
             time.sleep(2.0)
             orphans += sum(alive(w) for w in workers)
-            parts = out.with_name(out.name + ".parts")
-            kept.append(len(list(parts.glob("run-*.h5"))) if parts.exists() else (args.rows if out.exists() else 0))
+            kept.append(kept_runs(out, args.rows))
             if not out.exists():
                 subprocess.run([sys.executable, "-m", "pnrotor", "evolve", "--batch", csv, "-o", out, "--jobs",
                                 str(args.jobs), "-q", "--resume"], check=True, capture_output=True)

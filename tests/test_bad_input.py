@@ -161,9 +161,9 @@ def test_check_inputs_raises_what_evolve_raises_without_compiled_code():
 def test_sample_count_is_bounded_by_memory_before_allocating(sampling, monkeypatch):
     """Δt or n per orbit that would not fit: a ValueError naming sampling and the size, not a MemoryError
     or an OverflowError (the last case fits in memory unless only 1 MB is free, as pretended here)."""
-    from pnrotor.pn import sampling as pn_sampling
+    from pnrotor import processes
     if sampling == 1 / 4096:
-        monkeypatch.setattr(pn_sampling, "available_memory", lambda: 2 ** 20)
+        monkeypatch.setattr(processes, "available_memory", lambda: 2 ** 20)
     with pytest.raises(ValueError, match=r"sampling = .* would need .* samples \(.* GiB\), more than"):
         pnrotor.evolve(**GOOD, sampling=sampling)
 

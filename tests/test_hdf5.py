@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from pnrotor import __version__, hdf5
+from pnrotor.io import atomic
 from pnrotor.history import FrameHistory
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "hdf5-schema.md"
@@ -367,9 +368,9 @@ def test_writeback_thread_leaves_every_signal_to_the_main_thread(tmp_path, monke
     """The background fdatasync thread blocks all signals, so SIGINT/SIGTERM/SIGHUP reach the main thread
     (which raises KeyboardInterrupt at once) instead of waiting until the main thread next runs Python."""
     masks = []
-    monkeypatch.setattr(hdf5, "_fsync", lambda path, sync=os.fsync: masks.append(
+    monkeypatch.setattr(atomic, "fsync", lambda path, sync=os.fsync: masks.append(
         signal.pthread_sigmask(signal.SIG_BLOCK, [])))
-    writeback = hdf5._Writeback(tmp_path / "any.h5")
+    writeback = atomic.Writeback(tmp_path / "any.h5")
     writeback.start()
     writeback.join()
     assert {signal.SIGINT, signal.SIGTERM, signal.SIGHUP} <= masks[0]
@@ -384,7 +385,7 @@ def test_two_writers_of_a_new_path_never_both_succeed(tmp_path):
 
     for i in range(300):
         target = tmp_path / f"run{i}.h5"
-        temporaries = [hdf5._temporary_beside(target) for _ in range(2)]
+        temporaries = [atomic.temporary_beside(target) for _ in range(2)]
         for n, temporary in enumerate(temporaries):
             temporary.write_bytes(b"writer %d" % n)
         barrier, results = threading.Barrier(2), []
@@ -392,7 +393,7 @@ def test_two_writers_of_a_new_path_never_both_succeed(tmp_path):
         def publish(temporary):
             barrier.wait()
             try:
-                hdf5._publish(temporary, target, overwrite=False)
+                atomic.publish(temporary, target, overwrite=False)
                 results.append(temporary.name)
             except FileExistsError:
                 temporary.unlink()
@@ -438,7 +439,7 @@ def test_a_later_write_sweeps_the_temporaries_of_dead_writers(tmp_path):
     finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
                               text=True, check=True)
     dead = int(finished.stdout)
-    host = hdf5._HOST
+    host = atomic.HOST
     names = {"dead": f"run.h5.{host}.{dead}.0123abcd.pnrotor-tmp",
              "alive": f"run.h5.{host}.{os.getpid()}.89abcdef.pnrotor-tmp",
              "other host": f"run.h5.elsewhere.{dead}.0123abcd.pnrotor-tmp",
@@ -699,7 +700,7 @@ def test_batch_writer_cost_does_not_grow_with_the_file(tmp_path, monkeypatch):
 
     for name in ("copy", "copy2", "copyfile", "copyfileobj"):
         monkeypatch.setattr(shutil, name, count("copy", getattr(shutil, name)))
-    monkeypatch.setattr(hdf5, "_temporary_beside", count("temporary", hdf5._temporary_beside))
+    monkeypatch.setattr(atomic, "temporary_beside", count("temporary", atomic.temporary_beside))
     path = tmp_path / "batch.h5"
     with hdf5.batch(path) as batch:
         for i in range(30):
@@ -716,7 +717,7 @@ def test_batch_writer_cost_does_not_grow_with_the_file(tmp_path, monkeypatch):
 
 def test_batch_writer_not_durable_skips_the_fsyncs(tmp_path, monkeypatch):
     synced = []
-    monkeypatch.setattr(hdf5, "_fsync", synced.append)
+    monkeypatch.setattr(atomic, "fsync", synced.append)
     for durable in (True, False):
         with hdf5.batch(tmp_path / f"{durable}.h5", durable=durable) as batch:
             batch.add("a", frame_history())
@@ -879,7 +880,7 @@ def test_durable_write_starts_the_writeback_of_large_datasets(tmp_path, monkeypa
     def record(path, sync=os.fsync):
         (started if sync is os.fdatasync else synced).append(path)
 
-    monkeypatch.setattr(hdf5, "_fsync", record)
+    monkeypatch.setattr(atomic, "fsync", record)
     hdf5.write(tmp_path / "big.h5", frame_history(n=200_000))  # t: 1.6 MB, R: 6.4 MB
     assert 1 <= len(started) <= 2 and {p.name for p in started} == {synced[0].name}
     assert TEMPORARY.match(synced[0].name) and synced[1:] == [tmp_path]

@@ -14,6 +14,7 @@ from test_hdf5 import assert_identical, frame_history
 
 import pnrotor
 from pnrotor import hdf5
+from pnrotor.io import hdf5_read
 from pnrotor.waveform.modes import modes
 
 RUN = dict(m1=30.0, m2=10.0, chi1=(0.6, 0.0, 0.2), chi2=(0.0, -0.4, 0.1), f_ref=100.0)
@@ -166,7 +167,7 @@ def test_valid_files_of_every_kind_still_read_bitwise(tmp_path, evolution, wavef
     for name, run in {"evolution": evolution, "modes": waveform, "history": frame_history(), "empty": empty}.items():
         path = hdf5.write(tmp_path / f"{name}.h5", run, compression=compression, checksum=checksum)
         assert_identical(hdf5.read(path), run, name)
-        assert hdf5.layout_problems(type(run), hdf5._get(h5py.File(path, "r"), skip=hdf5._NOT_FIELDS)) == []
+        assert hdf5.layout_problems(type(run), hdf5_read.get_fields(h5py.File(path, "r"), skip=hdf5_read.NOT_FIELDS)) == []
     final = pnrotor.evolve(**RUN, sampling="final")  # one sample
     assert_identical(hdf5.read(hdf5.write(tmp_path / "final.h5", final)), final)
 
@@ -220,7 +221,7 @@ def test_required_keys_are_those_real_runs_have(evolution, waveform):
         for group, keys in hdf5.REQUIRED_KEYS[type(run).__name__].items():
             assert set(keys) <= set(getattr(run, group)), (type(run).__name__, group)
     for kind, arrays in hdf5.ARRAYS.items():
-        cls = pnrotor.Population if kind == "Population" else hdf5._class_of(kind, "")   # not a kind of file
+        cls = pnrotor.Population if kind == "Population" else hdf5_read.class_of(kind, "")   # not a kind of file
         top = {name for name in arrays if "/" not in name}   # GROUP/NAME: an array of a dict field
         assert top == {f.name for f in dataclasses.fields(cls) if f.type is np.ndarray}, kind
         assert {name.partition("/")[0] for name in arrays} - top <= {f.name for f in dataclasses.fields(cls)}, kind

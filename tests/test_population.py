@@ -142,6 +142,19 @@ def test_strings_with_unicode_and_the_layout_checks(tmp_path):
         hdf5.read(tmp_path / "u.h5")
 
 
+def test_a_table_written_before_horizon_absorption_reads_with_it_false(tmp_path):
+    """Schema-2 tables were written without ``inputs/horizon_absorption`` before the option came: they read, the
+    option False for every row, and the rest as written."""
+    (tmp_path / "t.csv").write_text(TABLE)
+    population.run(tmp_path / "t.csv", tmp_path / "a.h5")
+    table = hdf5.read(tmp_path / "a.h5")
+    with h5py.File(tmp_path / "a.h5", "r+") as f:
+        del f["inputs/horizon_absorption"]
+    older = hdf5.read(tmp_path / "a.h5")
+    assert older.inputs["horizon_absorption"].dtype == bool and not older.inputs["horizon_absorption"].any()
+    assert_identical(older, table)
+
+
 def test_a_pnrotor_without_the_kind_refuses_the_file_clearly(tmp_path, monkeypatch):
     """Schema 1 stays: a reader that does not know the kind refuses it by name before reading any field."""
     (tmp_path / "t.csv").write_text(TABLE)

@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 
 import h5py
 import pytest
@@ -102,29 +103,34 @@ def _ignore(*names):
 
 PAUSED_BATCH = """
 import os, sys, time
-import h5py
+from pnrotor.batch import backends
 from pnrotor.cli import main
-create = h5py.Group.create_dataset
-def create_dataset(self, name, *args, **kwargs):   # in the workers too (fork)
-    if name == "t" and self.name != "/0":   # every row but the first pauses while its part file is written
-        print("writing", self.name, flush=True)
+evolve_row = backends.evolve_row
+def paused(params):   # in the workers too (fork): every row but the first one computed pauses
+    try:
+        os.close(os.open("first", os.O_CREAT | os.O_EXCL))
+    except FileExistsError:
+        print("computing", flush=True)
         time.sleep(float(os.environ["PAUSE"]))
-    return create(self, name, *args, **kwargs)
-h5py.Group.create_dataset = create_dataset
+    return evolve_row(params)
+backends.evolve_row = paused
 sys.exit(main(sys.argv[1:]))
 """
 
 
 def _paused_batch(tmp_path, pause, rows, *ignored):
     """`pnrotor evolve --batch` (2 jobs) in its own process group, every row but the first pausing ``pause`` s in
-    its part file; returned once the first run is kept and a worker writes another."""
+    its worker; returned once the first run is kept (in the batch file being built) and the workers compute others."""
     _table(tmp_path / "b.csv", rows)
     process = subprocess.Popen([sys.executable, "-c", PAUSED_BATCH, "evolve", "--batch", "b.csv", "--jobs", "2", "-q",
                                 "-o", "out.h5"], cwd=tmp_path, env=dict(os.environ, PAUSE=str(pause)),
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
                                preexec_fn=_ignore(*ignored))
-    while not (tmp_path / "out.h5.parts" / "run-0.h5").exists():
-        assert process.stdout.readline().startswith("writing"), process.communicate(timeout=60)
+    assert process.stdout.readline().startswith("computing"), process.communicate(timeout=60)
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "out.h5.parts" / "runs.journal").exists():
+        assert process.poll() is None and time.monotonic() < deadline, process.communicate(timeout=60)
+        time.sleep(0.01)
     return process
 
 
@@ -132,7 +138,7 @@ def _paused_batch(tmp_path, pause, rows, *ignored):
 @pytest.mark.parametrize("name", ["SIGHUP", "SIGINT"])
 def test_a_nohup_or_background_batch_survives_the_signal_it_ignores(tmp_path, name):
     """``nohup pnrotor evolve --batch …`` died of the SIGHUP of a closed terminal (exit 130 "interrupted"), and a
-    background batch of a SIGINT: here sent to the whole process group, while the workers write."""
+    background batch of a SIGINT: here sent to the whole process group, while the workers compute."""
     process = _paused_batch(tmp_path, 0.5, 6, name)
     try:
         os.killpg(process.pid, getattr(signal, name))
@@ -146,9 +152,9 @@ def test_a_nohup_or_background_batch_survives_the_signal_it_ignores(tmp_path, na
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the pause reaches the workers by fork")
 def test_ctrl_c_of_a_jobs_batch_prints_one_line_with_the_resume_hint(tmp_path):
-    """Ctrl-C (SIGINT to the process group) while a worker writes its part file: one line, with the hint. The
-    workers took SIGINT while they wrote, and SIGTERM (how the batch stops them) with the command's handler, and
-    printed "Process ForkProcess-2" tracebacks or "Exception ignored in sys.unraisablehook"."""
+    """Ctrl-C (SIGINT to the process group) while the workers compute: one line, with the hint. The
+    workers (which wrote part files then) took SIGINT while they wrote, and SIGTERM (how the batch stops them) with
+    the command's handler, and printed "Process ForkProcess-2" tracebacks or "Exception ignored in sys.unraisablehook"."""
     process = _paused_batch(tmp_path, 60, 4)
     try:
         os.killpg(process.pid, signal.SIGINT)

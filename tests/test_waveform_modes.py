@@ -146,17 +146,17 @@ def test_modes_take_an_evolution():
 def test_modes_and_their_rotation_are_bounded_by_memory_before_allocating(monkeypatch):
     """Modes that would not fit (only 1 MiB free, as pretended here): a ValueError naming ell_max and sampling with
     the size, from modes() and from Modes.in_frame, before either allocates; with the memory there they are computed."""
-    from pnrotor.pn import sampling as pn_sampling
+    from pnrotor import processes
     run = pnrotor.evolve(**PRECESSING, sampling=DT)
     need = 16 * 77 * len(run)   # ℓ ≤ 8: 77 complex rows
     h = modes(run, ell_max=8)
-    monkeypatch.setattr(pn_sampling, "available_memory", lambda: need)
+    monkeypatch.setattr(processes, "available_memory", lambda: need)
     with pytest.raises(ValueError, match=f"modes\\(\\): 77 modes of {len(run)} samples would need .* GiB, more than "
                                          ".*; choose a smaller ell_max or a coarser sampling"):
         modes(run, ell_max=8)
     with pytest.raises(ValueError, match=f"rotating them: 77 modes of {len(run)} samples"):
         h.in_frame("coprecessing")
-    monkeypatch.setattr(pn_sampling, "available_memory", lambda: need + 1)
+    monkeypatch.setattr(processes, "available_memory", lambda: need + 1)
     assert modes(run, ell_max=8).data.shape == (77, len(run))
 
 
@@ -169,7 +169,7 @@ def test_available_memory_sees_the_address_space_limit():
     code = """
 import resource
 import pnrotor
-from pnrotor.pn.sampling import available_memory
+from pnrotor.processes import available_memory
 pnrotor.evolve(1.4, 1.4, (0, 0, 0), (0, 0, 0), 300.0, sampling=1 / 65536)   # compiled (or loaded) before the limit
 with open("/proc/self/statm") as f:
     size = int(f.read().split()[0]) * resource.getpagesize()

@@ -151,21 +151,21 @@ def test_blocks_are_the_samples_of_the_whole():
 def test_results_too_large_for_memory_name_the_streaming_write(monkeypatch):
     """compute() of each kind, evolve with that sampling and modes() of that run, when they would not fit (as
     pretended here): a ValueError with the size that names pnrotor.stream and hdf5.write, before allocating."""
-    from pnrotor.pn import sampling
+    from pnrotor import processes
     m1, m2, chi1, chi2, f_ref, options = CASES["BBH"]
     stream = pnrotor.stream(m1, m2, chi1, chi2, f_ref, delta_t=DT)
     run = pnrotor.evolve(m1, m2, chi1, chi2, f_ref, sampling=DT)
     n = len(stream)
     sizes = {"Evolution": 136 * n, "Modes": (16 * 77 + 56) * n, "Polarizations": 24 * n}
     for streamed in (stream.evolution(), stream.modes(), stream.polarizations(inclination=0.0, distance=1.0)):
-        monkeypatch.setattr(sampling, "available_memory", lambda: sizes[streamed.kind])
+        monkeypatch.setattr(processes, "available_memory", lambda: sizes[streamed.kind])
         with pytest.raises(ValueError, match=f"{streamed.kind}: {n} samples would need .* GiB, more than .*; choose "
                                              f".* or write them to a file block by block: pnrotor.hdf5.write\\(path, "
                                              f"pnrotor.stream\\("):
             streamed.compute()
-        monkeypatch.setattr(sampling, "available_memory", lambda: sizes[streamed.kind] + 1)
+        monkeypatch.setattr(processes, "available_memory", lambda: sizes[streamed.kind] + 1)
         assert len(getattr(streamed.compute(), "t_seconds")) == n
-    monkeypatch.setattr(sampling, "available_memory", lambda: 1 << 10)
+    monkeypatch.setattr(processes, "available_memory", lambda: 1 << 10)
     with pytest.raises(ValueError, match="sampling = .* or write the history to a file block by block: .*"
                                          "pnrotor.stream\\(.*\\).evolution\\(\\)"):
         pnrotor.evolve(m1, m2, chi1, chi2, f_ref, sampling=DT)

@@ -4,19 +4,19 @@ __version__ = "0.1.0"
 
 _EXPORTS = {
     "integrate_angular_velocity": "pnrotor.integrate",
-    "FrameHistory": "pnrotor.history",
+    "FrameHistory": "pnrotor.results",
     "evolve": "pnrotor.pn.evolve",
-    "Evolution": "pnrotor.pn.evolve",
+    "Evolution": "pnrotor.results",
     "evolve_many": "pnrotor.pn.many",
-    "Population": "pnrotor.pn.many",
+    "Population": "pnrotor.results",
     "modes": "pnrotor.waveform.stream",
-    "Modes": "pnrotor.waveform.modes",
+    "Modes": "pnrotor.results",
     "polarizations": "pnrotor.waveform.stream",
     "stream": "pnrotor.waveform.stream",
 }
 
 
-_SUBMODULES = {"analytic", "batch", "formulations", "hdf5", "ode", "pn", "quaternion", "waveform"}
+_SUBMODULES = {"analytic", "batch", "formulations", "hdf5", "ode", "pn", "quaternion", "results", "waveform"}
 """The subpackages the README uses as ``pnrotor.NAME`` without importing them first."""
 
 

@@ -29,7 +29,7 @@ class Approximant:
     of :data:`pnrotor.pn.vdot.VDOT_SIG`, or its ``"module:function"`` (imported when a run first uses it);
     ``description``: one line for help texts and the schema; ``aliases``: other names accepted (any case);
     ``tides``: how the tidal terms of F̂ and Ê′ and the horizon flux (both to first order:
-    :func:`pnrotor.pn.vdot.add_tides`, :func:`pnrotor.pn.vdot.add_horizon_flux`) enter N and D: 'as_is' (N ∋ F̂,
+    :func:`pnrotor.pn.vdot.add_tides`, :func:`pnrotor.pn.vdot.horizon_sign`) enter N and D: 'as_is' (N ∋ F̂,
     D ∋ Ê′ as they are), 'N' (N is the re-expanded F̂/Ê′), 'D' (D is the re-expanded Ê′/F̂), or None (the approximant
     takes neither: a ValueError); ``pole``: the termination when D falls to DEN_EPS (event 5; 'energy_balance' where
     D is Ê′ itself); ``lal_name``, ``lal_orders``: LALSuite's approximant of this model and the options that give its

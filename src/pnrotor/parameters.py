@@ -5,7 +5,7 @@ before numba loads) and `pnrotor.pn.many` both take them from here."""
 DEFAULTS = {
     "approximant": "T4", "pn_order": 3.5, "spin_orbit_order": None, "spin_spin_order": None,
     "precession": "averaged", "f_min": None, "f_max": None, "sampling": "steps", "atol": 1e-12,
-    "lambda1": 0.0, "lambda2": 0.0, "tidal_order": None,
+    "lambda1": 0.0, "lambda2": 0.0, "tidal_order": None, "horizon_absorption": False,
 }
 """Defaults of the optional run parameters (those of `pnrotor.evolve`; None: evolve's own choice)."""
 

@@ -7,14 +7,14 @@ runs start, ``plan(…)`` then ``Plan.run()``) is what ``pnrotor evolve --batch`
 * :mod:`~pnrotor.batch.backends` — serial, local worker processes or a Dask cluster;
 * :mod:`~pnrotor.batch.population` — the population mode (``--population``): final states only, by
   `pnrotor.evolve_many`, into one file of columns instead of a group per run;
-* here — the writer.  Every finished run is on disk at once, in the folder ``OUTPUT.parts`` beside the
-  output: local workers write their runs into part files there, and this process writes those of the
-  serial and Dask backends.  When every row is done, this process alone assembles the batch file with
-  `pnrotor.hdf5.batch` (HDF5's object copy of each run), atomically, and removes the folder.  Whatever
-  stops a batch (Ctrl-C, SIGTERM, kill -9, a crash), the finished runs stay in ``OUTPUT.parts`` and
-  ``resume=True`` (``pnrotor evolve --batch F --resume``) computes only the others, after checking that
-  the table is the one that made them.  Ctrl-C is deferred while HDF5 writes (:class:`_InterruptFlag`)
-  and stops the workers.
+* here — the writer.  Every finished run is on disk at once, in the batch file being built in the folder
+  ``OUTPUT.parts`` beside the output (``runs.h5``): this process adds each run as it arrives from the backend
+  (`pnrotor.hdf5.Journaled`), its bytes written once, each addition a commit of `pnrotor.io.journal`, so that
+  whatever stops a batch (Ctrl-C, SIGTERM, kill -9, a crash) leaves the file as of its last finished run.  When
+  every row is done the file is fsynced and renamed to the output, and the folder removed.  Interrupted, the
+  finished runs stay in ``OUTPUT.parts`` and ``resume=True`` (``pnrotor evolve --batch F --resume``) computes only
+  the others, after checking that the table is the one that made them (a run that no longer reads back is
+  computed again).  Ctrl-C is deferred while HDF5 writes (:class:`InterruptFlag`) and stops the workers.
 
 A row that fails keeps its message in :attr:`~pnrotor.batch.table.Row.error`; the others are written.
 """
@@ -66,8 +66,9 @@ class Plan:
     resume: bool = False
     modes: tuple = None
 
-    _PARTS = "run-*.h5"
-    """The part files in :attr:`parts` that hold finished results (a run each)."""
+    _PARTS = "runs.journal"
+    """The files in :attr:`parts` whose presence means finished results are kept there (the journal of the batch
+    file being built, which exists once a run has been added)."""
     _KEPT = "runs", "modes, compression, checksum"
     """What the part files hold, and the options besides the table that they depend on (the resume's message)."""
 
@@ -100,62 +101,67 @@ class Plan:
         return outcome
 
     def _run(self, start, progress):
-        done = self._stored() if self.resume else {}
+        store = self._store() if self.tasks else None
+        done = self._stored(store) if self.resume else {}
         tasks = [(i, params) for i, params in self.tasks if i not in done]
         evolve_seconds, results = 0.0, None
-        interrupted = _InterruptFlag()
+        interrupted = InterruptFlag()
         try:
             if self.scheduler is not None:
                 results = backends.results_dask(tasks, self.scheduler)
             if self.tasks:
-                (self.parts / _TABLE).write_text(self._fingerprint())
+                (self.parts / TABLE).write_text(self._fingerprint())
             if self.scheduler is None:
                 results = (backends.results_serial(tasks) if self.jobs == 1 or len(tasks) <= 1 else
-                           backends.results_pool(tasks, self.jobs, parts=self.parts, storage=self.storage))
-            with interrupted.deferred(), _progress_bar(len(tasks), enabled=progress) as bar:
+                           backends.results_pool(tasks, self.jobs))
+            with interrupted.deferred(), progress_bar(len(tasks), enabled=progress) as bar:
                 for index, ok, result in interrupted.interruptible(results):
-                    if ok and not isinstance(result, backends.Stored):   # this process's run: to its part file
-                        ok, result = backends.store_row(result, self.parts, index, self.storage)
+                    if ok:
+                        ok, result = self._add(store, index, result)
                     if ok:
                         done[index] = result
-                        evolve_seconds += result.brief["wall_time_s"]
+                        evolve_seconds += result["wall_time_s"]
                     else:
                         self.rows[index].error = result
                     bar.update()
         except KeyboardInterrupt:
             if results is not None:
-                results.close()   # the workers stopped, then counted: a part one wrote meanwhile is kept too
-            kept = len(list(self.parts.glob(self._PARTS)))   # the workers' too, not only those reported yet
-            if not kept:   # (and the folder goes)
+                results.close()   # the workers stopped
+            if not done:   # (and the folder goes)
                 raise KeyboardInterrupt("no run had finished; nothing kept") from None
-            raise KeyboardInterrupt(f"{kept} finished run{'s' * (kept != 1)} kept in {self.parts}; "
+            raise KeyboardInterrupt(f"{len(done)} finished run{'s' * (len(done) != 1)} kept in {self.parts}; "
                                     "complete the batch with --resume (resume=True)") from None
         finally:
             if results is not None:
                 results.close()  # stops the workers early after an error
             interrupted.restore()
-        written = self._assemble(done)
-        briefs = {index: stored.brief for index, stored in done.items()}
-        return Outcome(self.rows, briefs, self.path if written else None, written, time.perf_counter() - start,
-                       evolve_seconds)
-
-    def _assemble(self, done):
-        """The batch file from the finished runs, in row order (:meth:`run` then removes the parts folder)."""
         if done:
-            from pnrotor import hdf5
-
-            interrupted = _InterruptFlag()
+            interrupted = InterruptFlag()
             try:
-                with interrupted.deferred(), hdf5.batch(self.path, overwrite=self.overwrite, **self.storage) as out:
-                    for index in sorted(done):
-                        # parts read by _stored or just written by hdf5.write, which checks as read does
-                        out.copy_from(done[index].path, done[index].group, self.rows[index].name, verify=False)
-                        if self.modes is not None:
-                            out.copy_from(done[index].path, done[index].group + backends.MODES_SUFFIX,
-                                          self.rows[index].name + backends.MODES_SUFFIX, verify=False)
+                with interrupted.deferred():
+                    store.publish(self.path, self.overwrite)
             finally:
                 interrupted.restore()
-        return len(done)
+        return Outcome(self.rows, done, self.path if done else None, len(done), time.perf_counter() - start,
+                       evolve_seconds)
+
+    def _store(self):
+        """The batch file being built in :attr:`parts`, each finished run added at once (`pnrotor.hdf5.Journaled`)."""
+        from pnrotor import hdf5
+
+        return hdf5.Journaled(self.parts / _RUNS, self.parts / _JOURNAL, **self.storage)
+
+    def _add(self, store, index, result):
+        """Row `index`'s finished `result` (an Evolution, or (Evolution, Modes)) added to `store` under the row's
+        name → (True, its `backends.brief`), or (False, message) for a run `pnrotor.hdf5` refuses to write (e.g. a
+        non-finite sample): that row fails, not the batch."""
+        run, *waves = result if isinstance(result, tuple) else (result,)
+        name = self.rows[index].name
+        try:
+            store.add({name: run, **{name + backends.MODES_SUFFIX: wave for wave in waves}})
+        except ValueError as error:
+            return False, f"its run cannot be written: {error}"
+        return True, backends.brief(run)
 
     def _fingerprint(self):
         """What identifies the runs a batch stores: every row at its position (the part files are named by it;
@@ -179,7 +185,7 @@ class Plan:
     def _kept(self):
         """Whether :attr:`parts` holds results of an earlier attempt, after checking that they are this table's (its
         fingerprint, a ValueError otherwise)."""
-        table = self.parts / _TABLE
+        table = self.parts / TABLE
         if not table.exists() and not any(self.parts.glob(self._PARTS)):   # nothing kept: a first attempt
             return False
         if not table.exists() or table.read_text() != self._fingerprint():
@@ -188,21 +194,28 @@ class Plan:
                              "afresh")
         return True
 
-    def _stored(self):
-        """{row index: Stored} of the runs already in :attr:`parts`, after checking they are this table's."""
+    def _stored(self, store):
+        """{row index: brief} of the runs already in `store`, after checking they are this table's; a run that does
+        not read back (damaged), or whose modes do not, is removed from it, to be computed again."""
         from pnrotor import hdf5
 
         if not self._kept():
             return {}
-        done = {}
-        for part in sorted(self.parts.glob("*.h5")):
-            try:  # a part a kill cut short, or damaged: its runs are computed again
-                runs = {group: hdf5.read(part, group) for group in hdf5.list_runs(part)}
+        rows = {row.name: i for i, row in enumerate(self.rows) if row.error is None}
+        done, damaged = {}, []
+        for name in store.names():
+            if name not in rows:
+                continue   # a row's modes
+            try:
+                run = hdf5.read(store.path, name)
+                if self.modes is not None:
+                    hdf5.read(store.path, name + backends.MODES_SUFFIX)
             except (OSError, ValueError):
+                damaged += [name, name + backends.MODES_SUFFIX]
                 continue
-            for group, run in runs.items():
-                if group.isdigit() and int(group) < len(self.rows):
-                    done[int(group)] = backends.Stored(part, group, backends.brief(run))
+            done[rows[name]] = backends.brief(run)
+        if damaged:
+            store.remove(damaged)
         return done
 
     @contextlib.contextmanager
@@ -233,8 +246,11 @@ class Plan:
             raise
 
 
-_TABLE = "table.sha256"
+TABLE = "table.sha256"
 """In the parts folder: the fingerprint of the table whose runs it holds."""
+_RUNS, _JOURNAL = "runs.h5", "runs.journal"
+"""In the parts folder: the batch file being built, a run added as each finishes, and its journal
+(`pnrotor.io.journal`)."""
 _LOCK = "lock"
 """In the parts folder: the file a running batch holds its exclusive lock on (``flock``)."""
 
@@ -316,7 +332,7 @@ def run(table, output, *, progress=False, **options):
     return plan(table, output, **options).run(progress=progress)
 
 
-class _InterruptFlag:
+class InterruptFlag:
     """Ctrl-C is remembered and raised as KeyboardInterrupt at once, or by `check` after a `deferred` block
     (inside one, also when `interruptible` waits for its next item).
 
@@ -370,7 +386,7 @@ class _InterruptFlag:
         self.previous = {}
 
 
-def _progress_bar(total, enabled, unit="run"):
+def progress_bar(total, enabled, unit="run"):
     """A tqdm bar on stderr (`unit`s done, their rate, the time left), without tqdm's monitor thread (a thread would
     make later worker pools avoid 'fork'), or a stand-in that does nothing."""
     if not enabled:

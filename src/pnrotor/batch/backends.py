@@ -2,11 +2,10 @@
 
 * :func:`results_serial` — in this process, in order;
 * :func:`results_pool` — local worker processes (``fork`` where safe, :func:`start_method`), a few rows per
-  task (:func:`chunk_size`); with ``parts`` the workers write each run into its own HDF5 part file
-  (:func:`write_chunk`, :func:`store`) and send back only a :class:`Stored` and the run's :func:`brief`;
+  task (:func:`chunk_size`), each sending back its runs;
 * :func:`results_dask` — a Dask cluster (the ``pnrotor[dask]`` extra), one task per row.
 
-``result`` is the `Evolution`, a :class:`Stored`, or the message of the row's failure: one failing row
+``result`` is the `Evolution` (or (Evolution, Modes)), or the message of the row's failure: one failing row
 (a bad value, evolve's ``ValueError``, a dead worker) never stops the others (:func:`attempt`).
 
 The pool (:func:`pool_results`) and Dask take any ``work`` too: a function of a chunk of (index, payload) tasks that
@@ -16,7 +15,6 @@ flight): the population mode (`pnrotor.batch.population`) sends the chunks of a 
 
 import functools
 import sys
-from pathlib import Path
 
 from pnrotor.processes import die_with_parent
 
@@ -68,13 +66,6 @@ def in_dask_task(work, chunk):
         return work(chunk)
 
 
-class Stored:
-    """A run that a worker wrote into the part file `path` as group `group`, with the `brief` of it."""
-
-    def __init__(self, path, group, brief):
-        self.path, self.group, self.brief = path, group, brief
-
-
 MODES_SUFFIX = ".modes"
 """A row's modes are stored beside its run as the group ``NAME.modes``."""
 
@@ -83,43 +74,6 @@ def brief(run):
     """What the batch summary needs of a run: small enough to send back from a worker instead of the run."""
     return {"span": run.span(), "M_seconds": run.inputs["M_seconds"], "termination": run.termination,
             "samples": len(run), "nfev": run.stats["nfev"], "wall_time_s": run.stats["wall_time_s"]}
-
-
-def store(result, folder, index, storage):
-    """Write one finished row (an Evolution, or (Evolution, Modes)) into its own part file ``run-INDEX.h5``
-    (groups INDEX and INDEX.modes) in `folder` → `Stored`; atomic but not fsynced: it survives the process
-    (kill -9 included), not a power loss (fsyncs made 200 runs at 1/4096 s with --jobs 2 take ~20% longer)."""
-    from pnrotor import hdf5
-
-    run, *waves = result if isinstance(result, tuple) else (result,)
-    path = Path(folder) / f"run-{index}.h5"
-    with hdf5.batch(path, overwrite=True, durable=False, **storage) as part:
-        part.add(str(index), run)
-        for wave in waves:
-            part.add(str(index) + MODES_SUFFIX, wave)
-    return Stored(path, str(index), brief(run))
-
-
-def store_row(result, folder, index, storage):
-    """:func:`store` → (True, Stored), or (False, message) for a run that `pnrotor.hdf5` refuses to write (e.g.
-    a non-finite sample): that row fails, not the batch."""
-    try:
-        return True, store(result, folder, index, storage)
-    except ValueError as error:
-        return False, f"its run cannot be written: {error}"
-
-
-def write_chunk(chunk, folder, storage):
-    """`attempt` on each (index, params) of a chunk, each finished run written at once into its own part file
-    in `folder` (:func:`store`, so a killed worker loses only the run it was computing) → [(index, ok, Stored
-    or message)]. Encoding HDF5 costs several times a typical run, so the workers do it and the parent only
-    copies the groups into the batch file (`Batch.copy_from`, HDF5's object copy, which keeps their layout
-    and filters)."""
-    results = []
-    for index, params in chunk:
-        ok, result = attempt(params)
-        results.append((index, *(store_row(result, folder, index, storage) if ok else (ok, result))))
-    return results
 
 
 def _preload(thread_count=1):
@@ -161,17 +115,15 @@ def start_method():
     return "forkserver" if "forkserver" in methods else "spawn"
 
 
-def results_pool(tasks, jobs, context=None, chunksize=None, parts=None, storage=None):
+def results_pool(tasks, jobs, context=None, chunksize=None):
     """Start `jobs` worker processes on `tasks` [(index, params)] and return a generator of (index, ok, result),
     in the order the chunks finish (:func:`pool_results`).
 
-    The workers take `chunksize` rows per task. They send back each run, or with `parts` (a folder) write the runs
-    to part files there (with the `pnrotor.hdf5.batch` options `storage`, a dict) and send back a `Stored` each, the
-    part files staying for the caller."""
+    The workers take `chunksize` rows per task and send back each run (the batch writer adds it to the batch file
+    at once)."""
     size = chunksize or chunk_size(len(tasks), jobs)
     chunks = [tasks[i : i + size] for i in range(0, len(tasks), size)]
-    work = attempt_chunk if parts is None else functools.partial(write_chunk, folder=parts, storage=storage or {})
-    return pool_results(work, chunks, min(jobs, len(chunks)), context)
+    return pool_results(attempt_chunk, chunks, min(jobs, len(chunks)), context)
 
 
 def pool_results(work, chunks, jobs, context=None, window=None, thread_count=1):

@@ -42,90 +42,22 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pnrotor.batch import _TABLE, Outcome, _InterruptFlag, _progress_bar, backends, check_output
+from pnrotor.batch import TABLE, InterruptFlag, Outcome, backends, check_output, progress_bar
 from pnrotor.batch import Plan as _BatchPlan
 from pnrotor.batch.table import Row, TableFile, parse_row
-from pnrotor.history import short_repr
-from pnrotor.pn.many import STATE, SpinAngles
+from pnrotor.results.populations import STATE, PopulationTable
 
 __all__ = ["PopulationTable", "Plan", "plan", "run", "unsupported", "compute_chunk", "SHARED", "CHUNK"]
 
 CHUNK = 10_000
 """Rows per chunk: one task, one `evolve_many` call per group of options, one part file."""
 
-SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order")
+SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order",
+          "horizon_absorption")
 """The table's columns that `evolve_many` takes as shared by all its binaries: one call per combination."""
 
 FIELDS = STATE + ("termination", "reached", "message", "nsteps", "nfev")
 """The array fields of `pnrotor.Population` that a :class:`PopulationTable` keeps, row by row."""
-
-
-@dataclass
-class PopulationTable(SpinAngles):
-    """The states of a table's rows at their targets (those that succeeded, in the table's order), one entry per row.
-
-    Derived at the states, as for `pnrotor.Population`: ``theta1``, ``theta2``, ``phi12``, ``chi_eff``, ``chi_p``
-    (`pnrotor.pn.many.spin_angles` for the formulas); :meth:`to_pandas` gives the table as a DataFrame.
-
-    Attributes
-    ----------
-    name : (N,) str — the row's name (its name column, or `pnrotor.batch.table.default_name`)
-    t, t_seconds, v, Phi, chi1, chi2, R, ell_hat, termination, reached, message, nsteps, nfev, stopped_at : as in
-        `pnrotor.Population` (the state at the target, NaN where ``reached`` is False; why its integration stopped
-        and that integration's work; the states where the integrations stopped), (N,), (N, 3) or (N, 4)
-    inputs : dict — per row (arrays of N): ``row`` (its number in the table, from 1), ``m1_Msun``,
-        ``m2_Msun``, ``chi1``, ``chi2`` (at f_ref), ``f_ref_Hz``, ``f_min_Hz``, ``f_max_Hz`` (NaN where absent),
-        ``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order`` (NaN: evolve's default),
-        ``precession``, ``atol``, ``lambda1``, ``lambda2``, ``tidal_order`` (NaN: evolve's default); and the options
-        every row shares (``rtol``, ``rotor``, ...), as
-        `Population.inputs` has them
-    """
-
-    name: np.ndarray
-    t: np.ndarray
-    t_seconds: np.ndarray
-    v: np.ndarray
-    Phi: np.ndarray
-    chi1: np.ndarray
-    chi2: np.ndarray
-    R: np.ndarray
-    ell_hat: np.ndarray
-    termination: np.ndarray
-    reached: np.ndarray
-    message: np.ndarray
-    nsteps: np.ndarray
-    nfev: np.ndarray
-    stopped_at: dict
-    inputs: dict = field(default_factory=dict)
-
-    __repr__ = short_repr
-
-    @staticmethod
-    def from_schema_1(values):
-        """The fields of a table of HDF5 schema 1 (`pnrotor.hdf5.read`; docs/hdf5-schema.md), which held each row's
-        state where its integration stopped and had no ``reached``, ``stopped_at`` or tidal inputs: that state as
-        ``stopped_at``, ``reached`` from its termination as `pnrotor.evolve_many` sets it (f_max or f_min for a target
-        frequency, one of `pnrotor.pn.many.INSPIRAL_ENDS` for the end of the inspiral), NaN states where it is False,
-        and no tides (Λ = 0, the tidal order evolve's default)."""
-        from pnrotor.pn.many import INSPIRAL_ENDS
-
-        if "reached" in values or any(name not in values for name in STATE + ("termination", "inputs")):
-            return values   # not a table of schema 1's layout: the layout check says what is wrong
-        inputs = values["inputs"]
-        targets = [name for name in ("f_max", "f_min") if name + "_Hz" in inputs]
-        has_target = np.any([~np.isnan(np.asarray(inputs[name + "_Hz"], dtype=float)) for name in targets], axis=0)
-        termination = np.asarray(values["termination"])
-        reached = np.where(has_target, np.isin(termination, ("f_max", "f_min")), np.isin(termination, INSPIRAL_ENDS))
-        n = termination.shape
-        upgraded = dict(values, reached=reached, stopped_at={name: values[name] for name in STATE},
-                        inputs={"lambda1": np.zeros(n), "lambda2": np.zeros(n), "tidal_order": np.full(n, np.nan),
-                                **inputs})
-        for name in STATE:
-            upgraded[name] = np.where(reached.reshape(n + (1,) * (values[name].ndim - 1)), values[name], np.nan)
-        return upgraded
-
-    def __len__(self):
-        return self.t.shape[0]
 
 
 def unsupported(params):
@@ -245,6 +177,7 @@ def _table(rows, parts):
         "precession": _strings(row.params["precession"] for row in rows), "atol": _floats(rows, "atol"),
         "lambda1": _floats(rows, "lambda1"), "lambda2": _floats(rows, "lambda2"),
         "tidal_order": _floats(rows, "tidal_order", nan),
+        "horizon_absorption": np.array([row.params["horizon_absorption"] for row in rows], dtype=bool),
     }
     common = {key: value for key, value in parts[0][1].inputs.items() if key not in SHARED + PER_BINARY}
     return PopulationTable(name=_strings(row.name for row in rows), **columns, stopped_at=stopped_at,
@@ -309,16 +242,16 @@ class Plan(_BatchPlan):
         jobs = min(self.jobs, len(self.tasks) - len(done))
         if self.scheduler is not None:
             results = backends.results_dask(tasks(), self.scheduler, work, window=lambda threads: 2 * threads)
-        (self.parts / _TABLE).write_text(self._fingerprint())
+        (self.parts / TABLE).write_text(self._fingerprint())
         if self.scheduler is None and jobs <= 1:
             results = (result for task in tasks() for result in work([task]))
         elif self.scheduler is None:
             results = backends.pool_results(work, ([task] for task in tasks()), jobs, window=2 * jobs,
                                             thread_count=max(1, (os.cpu_count() or 1) // jobs))
         evolve_seconds = 0.0
-        interrupted = _InterruptFlag()
+        interrupted = InterruptFlag()
         try:
-            with interrupted.deferred(), _progress_bar(remaining, enabled=progress, unit="row") as bar:
+            with interrupted.deferred(), progress_bar(remaining, enabled=progress, unit="row") as bar:
                 for index, ok, result in interrupted.interruptible(results):
                     records = pending.pop(index)
                     if not ok:   # a worker lost (twice for a pool): every row of the chunk fails with the reason

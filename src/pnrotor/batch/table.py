@@ -77,6 +77,8 @@ def default_name(p):
             parts.append(f"{tag}{_number(p[key])}")
     if p["precession"] != DEFAULTS["precession"]:
         parts.append(str(p["precession"]))
+    if p["horizon_absorption"]:
+        parts.append("horizon")
     sampling = p["sampling"]
     if isinstance(sampling, tuple):
         parts.append(f"perorbit{sampling[1]}")
@@ -131,14 +133,14 @@ def read_batch(path, cli_defaults):
 
 def parse_row(number, label, record, cli_defaults):
     """The :class:`Row` of a record (column → cell; empty cells absent): its parameters and name, or its error."""
-    from pnrotor.hdf5 import _valid_name   # what can name a group (not at import: the CLI starts without h5py)
+    from pnrotor.hdf5 import valid_name   # what can name a group (not at import: the CLI starts without h5py)
 
     row = Row(number, label)
     try:
         row.params, row.name = _row_parameters(record, cli_defaults)
     except ValueError as error:
         row.error = str(error)
-        if _valid_name(record.get("name")):   # a failure still says which row it is
+        if valid_name(record.get("name")):   # a failure still says which row it is
             row.name = record["name"]
     return row
 
@@ -332,18 +334,32 @@ def _row_parameters(record, cli_defaults):
             params[key] = parse_sampling(value, "sampling")
         elif key in ("approximant", "precession"):
             params[key] = str(value)
+        elif key == "horizon_absorption":
+            params[key] = _bool(value, key)
         else:
             params[key] = _float(value, key)
-    from pnrotor.hdf5 import _valid_name
+    from pnrotor.hdf5 import valid_name
 
     name = record.get("name")
     if name is None:
         name = default_name(params)
-    elif not _valid_name(name):
+    elif not valid_name(name):
         raise ValueError(f"name {name!r} is not a valid group name (non-empty, no '/', not '.')")
     else:
         default_name(params)  # checks the approximant before the run
     return params, name
+
+
+def _bool(value, key):
+    """True or False from a TOML boolean or a CSV cell true/false (any case), 1/0."""
+    if isinstance(value, bool):
+        return value
+    text = str(value).strip().lower()
+    if text in ("true", "1"):
+        return True
+    if text in ("false", "0"):
+        return False
+    raise ValueError(f"{key} must be true or false (or 1, 0), got {value!r}")
 
 
 def _float(value, key):

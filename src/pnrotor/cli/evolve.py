@@ -96,6 +96,9 @@ def add_parser(subparsers):
                        help="dimensionless tidal deformability of body 2 (default 0)")
     model.add_argument("--tidal-order", type=float, metavar="ORDER",
                        help="PN order of the tidal terms: 0 (none), 5 or 6 (default 6)")
+    model.add_argument("--horizon-absorption", action="store_true", default=None,
+                       help="follow the energy and angular momentum the black holes' horizons absorb (tidal heating, "
+                       "Alvi 2001, averaged over the orbit): in the energy balance, the spins and the masses")
     output = parser.add_argument_group("output")
     output.add_argument("-o", "--output", metavar="FILE.h5",
                         help="output file (default: waveforms/NAME.h5, NAME from the parameters, or waveforms/STEM.h5 "
@@ -199,9 +202,12 @@ def run(args):
 def _output_path(args, stem):
     """The output file, checked before anything is computed: (path, whether its folder is the default)."""
     if args.output is not None:
+        from pnrotor import io
+
         path = Path(args.output)
         if path.is_dir():
             raise IsADirectoryError(f"{path} is a folder; give a file name such as {path / (stem + '.h5')}")
+        io.format_of(path)
         if not path.parent.is_dir():
             raise FileNotFoundError(f"folder {path.parent} does not exist (-o {path}); create it first")
         default = False
@@ -234,6 +240,7 @@ def _run_one(args):
     uniform = isinstance(params["sampling"], float)
     path, default_folder = _output_path(args, default_name(params))
     if args.modes or args.polarizations:
+        from pnrotor.results.waves import angle
         from pnrotor.waveform import modes
 
         ell_max, order2, distance = modes.check_arguments(*_modes_options(args))
@@ -242,8 +249,8 @@ def _run_one(args):
             raise UsageError("--polarizations needs a time step --sampling DT (e.g. 1/4096): h+, hx on a uniform grid")
         if args.inclination is None or distance is None:
             raise UsageError("--polarizations needs --inclination (radians) and --distance (Mpc)")
-        line_of_sight = dict(inclination=modes._angle(args.inclination, "--inclination"),
-                             phi_ref=modes._angle(args.phi_ref or 0.0, "--phi-ref"))
+        line_of_sight = dict(inclination=angle(args.inclination, "--inclination"),
+                             phi_ref=angle(args.phi_ref or 0.0, "--phi-ref"))
 
     from pnrotor.pn.evolve import check_inputs
 
@@ -283,7 +290,9 @@ def _run_one(args):
             for name, result in groups:
                 batch.add(name, result)
     else:
-        hdf5.write(path, run, overwrite=args.overwrite, **storage)
+        from pnrotor import io
+
+        io.write(path, run, overwrite=args.overwrite, **storage)
     if not args.quiet:
         print("\n".join(summary(_ends(run) if uniform else run, time.perf_counter() - start, samples)))
         if args.modes:
@@ -338,7 +347,7 @@ def summary(run, wall=None, samples=None):
         f"f_ref {i['f_ref_Hz']:g} Hz ({i['spin_content']})",
         f"  model          {i['approximant']}, PN order {i['pn_order']:g} (spin-orbit {i['spin_orbit_order']:g}, "
         f"spin-spin {i['spin_spin_order']:g}), precession {i['precession']}, atol {i['atol']:g}"
-        + _tides_text(i),
+        + _tides_text(i) + (", horizon absorption" if i.get("horizon_absorption") else ""),
         f"  duration       {(t1 - t0) * M:.6g} s = {t1 - t0:.6g} M  (t from {t0:.6g} to {t1:.6g} M)",
         f"  ΔΦ/2π          {_orbits_text(orbits, exact)}",
         f"  v              {v0:.6g} -> {v1:.6g}",
@@ -347,6 +356,9 @@ def summary(run, wall=None, samples=None):
         f"  backward       {s['termination_backward']}: {s['termination_backward_message']}",
         f"  work           {s['nfev']} evaluations, {s['nsteps']} steps ({s['naccepted']} accepted, "
         f"{s['nrejected']} rejected)",
+        *([f"  masses         m1 {s['m1_initial_Msun']:.9g} -> {s['m1_final_Msun']:.9g} Msun, m2 "
+           f"{s['m2_initial_Msun']:.9g} -> {s['m2_final_Msun']:.9g} Msun (the horizons' absorption)"]
+          if "m1_final_Msun" in s else []),
         f"  samples        {len(run) if samples is None else samples} ({_sampling_text(i)})",
         f"  wall time      {s['wall_time_s']:.3g} s evolving"
         + (f", {wall:.3g} s in all (imports and writing included)" if wall is not None else ""),

@@ -63,6 +63,10 @@ def run(args):
     get_formulation(args.formulation)
     if args.output and not args.overwrite and Path(args.output).exists():
         raise FileExistsError(f"{args.output} exists; pass --overwrite to replace it")
+    if args.output:
+        from pnrotor import io
+
+        io.format_of(args.output)
     if args.output and not Path(args.output).parent.is_dir():
         raise FileNotFoundError(f"folder {Path(args.output).parent} does not exist (-o {args.output}); create it first")
     R0 = binary.rotor(0.0)
@@ -91,8 +95,8 @@ def run(args):
         print(f"  generator resets {history.n_resets}")
     print(f"  status           {history.status}: {history.message}")
     if args.output:
-        from pnrotor import hdf5
+        from pnrotor import io
 
-        print(f"wrote {hdf5.write(args.output, history, overwrite=args.overwrite)}")
+        print(f"wrote {io.write(args.output, history, overwrite=args.overwrite)}")
     print("OK" if ok else "FAILED: " + ("integration did not reach T" if history.status else "max δ above the limit"))
     return 0 if ok else 1

@@ -99,7 +99,7 @@ def _evolve_options():
 
 def _lal_order(value, name, highest):
     """The PN order of a LAL order ``value`` (−1, or an integer 0 … ``highest``: twice the PN order), None for −1."""
-    from pnrotor.pn.initial import real
+    from pnrotor.values import real
 
     k = float(value) if real(value) else math.nan
     if not (k == -1 or k in range(highest + 1)):
@@ -112,7 +112,7 @@ def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, s
               dquad_mon1=None, dquad_mon2=None, lambda1=None, lambda2=None, **options):
     """:class:`Arguments` from the SpinTaylor keywords (module docstring); a ValueError naming the first bad one."""
     from pnrotor.pn.evolve import LAL_TIDAL_ORDERS
-    from pnrotor.pn.initial import real
+    from pnrotor.values import real
     from pnrotor.pn.settings import MAX_SO_ORDER, MAX_SS_ORDER
     from pnrotor.waveform.modes import ELL_MAX
 
@@ -183,7 +183,7 @@ def spintaylor_polarizations(approximant, m1, m2, chi1, chi2, *, distance, incli
     """(epoch in s, h₊, h×) with the meaning of LAL's ChooseTDWaveform(SpinTaylor``approximant``) (module docstring):
     masses in M☉, χᵢ (3,), distance in Mpc, angles in rad, frequencies in Hz, ``keywords`` those of
     :func:`arguments` and pnrotor's options."""
-    from pnrotor.pn.initial import real
+    from pnrotor.values import real
 
     if not (real(long_asc_nodes) and math.isfinite(long_asc_nodes)):
         raise ValueError(f"long_asc_nodes must be a finite angle in radians; got {long_asc_nodes!r}")

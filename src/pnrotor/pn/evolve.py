@@ -42,11 +42,10 @@ import inspect
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..history import short_repr
 from ..ode import EVENTS_SIG, RHS_SIG, by_address
 from ..ode.common import OUT_FINAL, OUT_STEPS, controller, default_hook
 from ..ode.dop853 import run_core
@@ -55,10 +54,10 @@ from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STAT
 from .. import approximants
 from . import ends, layout, rhs, system
 from . import initial as _ini
-from .flux import horizon_flux
 from .sampling import compile_output_kernel, sample
 from .series import basis_values, kmax_from_orders
 from .settings import settings
+from pnrotor.results.runs import Evolution
 
 TERMINATION_MESSAGES = {
     "f_max": "v reached the requested end frequency f_max",
@@ -82,86 +81,6 @@ makes every few steps a rejection (18–57 of 116–216 attempts in the LALSuite
 (0.85, 4) there are none and the runs cost 10–35% fewer evaluations (benchmarks/bench_pn.py)."""
 CONTROLLER_ARGS = controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
 """(safety, min_factor, max_factor) as :func:`pnrotor.ode.dop853` would check them (min_factor its default)."""
-
-
-@dataclass
-class Evolution:
-    """History of a PN evolution: plain arrays and scalars (HDF5-friendly).
-
-    Attributes
-    ----------
-    t : (N,) times in units of the total mass M (t = 0 at f_ref)
-    t_seconds : (N,) the same in seconds
-    v : (N,) PN parameter v = (M Ω_orb)^{1/3}
-    Phi : (N,) orbital phase Φ (Φ = 0 at t = 0)
-    chi1, chi2 : (N, 3) dimensionless spins in the inertial frame
-    R : (N, 4) unit orbital-frame rotor (w, x, y, z), sign-continuous: n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹
-    ell_hat : (N, 3) orbital angular momentum direction ℓ̂ = R ẑ R⁻¹
-    termination : str — why the forward integration stopped (see module docstring)
-    stats : dict — nfev, nsteps, naccepted, nrejected (both halves), per-half counts, wall times,
-        backward termination, messages
-    inputs : dict — every input, with units in the key names; only floats, ints, bools, strings and
-        lists of floats (absent f_min/f_max and the value of 'steps'/'final' sampling are NaN)
-
-    In a nonspinning or aligned run (``inputs['state'] == 'aligned'``) chi1, chi2 and ell_hat are constant: they
-    are read-only (N, 3) views of their one row (zero stride along N, as ``np.broadcast_to`` gives);
-    ``run.chi1.copy()`` gives a writable C-ordered array.
-    """
-
-    t: np.ndarray
-    t_seconds: np.ndarray
-    v: np.ndarray
-    Phi: np.ndarray
-    chi1: np.ndarray
-    chi2: np.ndarray
-    R: np.ndarray
-    ell_hat: np.ndarray
-    termination: str
-    stats: dict = field(default_factory=dict)
-    inputs: dict = field(default_factory=dict)
-
-    __repr__ = short_repr
-
-    @property
-    def n_hat(self):
-        """Separation direction n̂ = R x̂ R⁻¹, (N, 3)."""
-        w, x, y, z = self.R.T
-        return np.column_stack((1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)))
-
-    @property
-    def f_gw(self):
-        """Gravitational-wave frequency 2 f_orb = v³/(π M) in Hz."""
-        return _ini.frequency_from_v(self.v, self.inputs["M_seconds"])
-
-    def __len__(self):
-        return self.t.size
-
-    def span(self):
-        """(t_start, t_end in M, v_start, v_end, orbits, whether the orbits span the whole integration).
-
-        Times and v are those of the whole integration whatever the sampling (without f_min the start is f_ref,
-        where Φ = 0). The orbits (Φ_end − Φ_start)/2π are exact when the samples include both ends (sampling
-        'steps', or 'final' without f_min); otherwise they are counted between the first and last samples (a
-        Δt or per-orbit grid), or None (one sample that is not the start)."""
-        stats, inputs = self.stats, self.inputs
-        backward = stats["termination_backward"] != "not_integrated"
-        t0, t1 = stats["t_initial"], stats["t_final"]
-        n = len(self)
-        if not backward:
-            v0, phi0 = inputs["v_ref"], 0.0
-        elif n and self.t[0] == t0:
-            v0, phi0 = self.v[0].item(), self.Phi[0].item()
-        elif stats["termination_backward"] == "f_min":
-            v0, phi0 = (math.pi * inputs["M_seconds"] * inputs["f_min_Hz"]) ** (1 / 3), None
-        else:
-            v0, phi0 = (self.v[0].item() if n else math.nan), None
-        v1 = stats["v_final"]
-        phi1 = self.Phi[-1].item() if n and self.t[-1] == t1 else None
-        if phi0 is not None and phi1 is not None:
-            return t0, t1, v0, v1, (phi1 - phi0) / (2 * math.pi), True
-        if n >= 2:
-            return t0, t1, v0, v1, (self.Phi[-1] - self.Phi[0]).item() / (2 * math.pi), False
-        return t0, t1, v0, v1, None, False
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -194,21 +113,9 @@ def build_system(s):
         kappa2=s.kappa2, lambda1=s.lambda1, lambda2=s.lambda2, v_end=s.v_max, spin_tol=layout.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
         phase_shift=s.precession_phase_shift,
         aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
-        horizon=_horizon(s, bvals))
+        horizon=s.horizon_absorption)
     check_start(s, kmax, bvals, *at_v0, ends.earlier_end(*events.addresses, y0, p))
     return System(rhs, events, p, y0, kmax, bvals)
-
-
-def _horizon(s, bvals):
-    """{k: c} of the flux into both horizons (:func:`pnrotor.pn.flux.horizon_flux`) with ``horizon_absorption``
-    (nonspinning or aligned spins, ℓ̂·χᵢ = bvals[1], bvals[2]), else None."""
-    if not s.horizon_absorption:
-        return None
-    out = {}
-    for X, a in ((s.X1, bvals[1]), (1.0 - s.X1, bvals[2])):
-        for k, c in horizon_flux(X, a).items():
-            out[k] = out.get(k, 0.0) + c
-    return out
 
 
 def kmax_of(s):
@@ -243,6 +150,8 @@ def _start(s):
     bvals = _invariants(x1, y1, z1, x2, y2, z2, lx, ly, lz)
     if s.use_aligned:
         return bvals, np.array([s.v0, 0.0])
+    if s.horizon_absorption:   # [v, χ₁, χ₂, R, Φ, m₁, m₂], the masses in units of M at f_ref
+        return bvals, np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0, s.X1, 1.0 - s.X1])
     return bvals, np.array([s.v0, x1, y1, z1, x2, y2, z2, *s.R0.tolist(), 0.0])   # [v, χ₁, χ₂, R, Φ]
 
 
@@ -258,7 +167,9 @@ def build_rows(o, b, parts, rows):
     rhs, events = _functions(aligned, o.precession)
     bases = np.ascontiguousarray(_invariants(*b.chi1.T, *b.chi2.T, *b.ell_hat.T).T)
     zeros = np.zeros((b.v0.size, 1))
-    Y0 = np.concatenate([b.v0[:, None], zeros] if aligned else [b.v0[:, None], b.chi1, b.chi2, b.R0, zeros], axis=1)
+    masses = [b.X1[:, None], 1.0 - b.X1[:, None]] if o.horizon_absorption else []
+    Y0 = np.concatenate([b.v0[:, None], zeros] if aligned else [b.v0[:, None], b.chi1, b.chi2, b.R0, zeros, *masses],
+                        axis=1)
     P, checks = np.zeros((b.v0.size, layout.P_SIZE)), np.empty((b.v0.size, 5))
     system.start_rows(*parts, rows, bases, aligned, b.v_max, layout.spin_tolerance(o.atol, o.rtol), *events.addresses,
                     Y0, P, checks)
@@ -274,7 +185,7 @@ def population_parts(s, X1, kappa1, kappa2, lambda1=0.0, lambda2=0.0):
     and arrays X1, κ₁, κ₂, Λ₁, Λ₂ (row i is what :func:`build_rows` takes for binary i)."""
     return system.spin_independent_parts(X1, kappa1, kappa2, s.approximant, kmax_of(s),
                                        s.spin_orbit_order, s.spin_spin_order, s.rotor, s.precession_phase_shift,
-                                       _omega_l(s), lambda1, lambda2)
+                                       _omega_l(s), lambda1, lambda2, s.horizon_absorption)
 
 
 def check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
@@ -442,11 +353,16 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         PN order of the tidal terms: 0 none, 5 the leading ones, 6 with their 1PN corrections (None: 6), kept
         whatever ``pn_order`` is, as LALSuite's tideO.
     horizon_absorption : bool
-        Add the energy flux into black-hole horizons (Alvi 2001 at leading order in the tidal coupling, exact in
-        the spins: relative 2.5PN with spins, 4PN without; :func:`pnrotor.pn.flux.horizon_flux`) to the energy
-        balance, at first order in it, whatever ``pn_order`` is.  For nonspinning binaries and spins along ℓ̂
-        (a ValueError for precessing ones); the spins' and masses' own change by the absorbed angular momentum
-        and energy is not followed (the aligned state holds the spins constant).  LALSuite has no such option.
+        Follow the flux into black-hole horizons, averaged over the orbit, for any spins (Alvi 2001 at leading order
+        in the tidal coupling, exact in the spins: relative 2.5PN with spins, 4PN without;
+        :func:`pnrotor.pn.flux.horizon_rates`): its energy in the energy balance at first order whatever
+        ``pn_order`` is, its angular momentum in the spins' magnitudes (taken from the orbit: in ℓ̂'s precession
+        too) and its energy in the masses.  Such a run integrates the precessing state, with the masses, even for
+        nonspinning and aligned spins (``inputs['state']`` is 'precessing'; aligned spins stay aligned), and its
+        ``stats`` hold the masses at both ends in M☉ (``m1_final_Msun``, ``m2_final_Msun``, ``m1_initial_Msun``,
+        ``m2_initial_Msun``); the rates and the PN coefficients take the masses at f_ref.  A body with Λᵢ > 0 (a
+        neutron star) has no horizon: it absorbs nothing.  Not with precession='instantaneous'.  LALSuite has no
+        such option.
 
     Returns
     -------
@@ -482,6 +398,11 @@ def integrate(s):
     t_int = time.perf_counter() - t_int
     stats = _stats(res_f, res_b, term_f, term_b)
     stats["wall_time_integrate_s"] = t_int
+    if s.horizon_absorption:   # the masses the horizons' absorption leaves at both ends of the run
+        M = s.m1 + s.m2
+        for key, res in (("final", res_f), ("initial", res_b)):
+            m = (s.X1, 1.0 - s.X1) if res is None else res.y[-1, layout.Y_M1:layout.Y_M2 + 1].tolist()
+            stats[f"m1_{key}_Msun"], stats[f"m2_{key}_Msun"] = m[0] * M, m[1] * M
     return res_f, res_b, term_f, stats
 
 

@@ -19,8 +19,8 @@ Sources, term by term:
   of arXiv:1501.01529.
 * tidal, 5PN and 6PN: Vines, Flanagan & Hinderer 2011, arXiv:1101.1673, Eq. (3.6) ((3.7) on arXiv)
   (:func:`tidal_flux`), in LALSuite's dimensionless Λᵢ (:mod:`pnrotor.pn.energy`).
-* the flux into black-hole horizons (``horizon_absorption``), at leading order in the tidal coupling, for spins
-  along ℓ̂: Alvi 2001 (gr-qc/0107080) (:func:`horizon_flux`).
+* the flux into black-hole horizons (``horizon_absorption``), at leading order in the tidal coupling, any spins,
+  averaged over the orbit: Alvi 2001 (gr-qc/0107080) (:func:`horizon_rates`, with the spins' and masses' rates).
 
 Note on LALSuite: its orbit-averaged 3PN quadrupole-monopole coefficient of (ℓ̂·Sᵢ)²,
 ``XLALSimInspiralPNFlux_6PNQMS1OS1OCoeffAvg``, has the constant 12.9/8 = 129/80 where the
@@ -32,6 +32,7 @@ agree with 129/8); we use 129/8, so SpinTaylorT1 with spins differs from LALSuit
 import math
 
 import numpy as np
+from numba import njit
 
 from .energy import EULER_GAMMA, LN2, PI2
 from .series import NK, add_tidal, assemble, shape_of
@@ -153,25 +154,61 @@ def tidal_flux(X):
     }
 
 
-def horizon_flux(X, a):
-    """{k: c_k} with F̂_H ∋ c_k v^k: the energy flux into the horizon of the black hole of mass fraction X and spin
-    a = ℓ̂·χ along ℓ̂ (either sign), relative to the Newtonian flux (32/5)ν²v¹⁰, at leading order in the tidal
-    coupling, where it is exact in the spin.
+@njit(cache=True)
+def horizon_rates(X, nu, v, a, chi_sq):
+    r"""(F̂_H, v ∂F̂_H/∂v, dS/dt, dm/dt) of the black hole of mass fraction X (G = c = M = 1) with spin χ⃗, a = ℓ̂·χ⃗
+    and χ² = χ⃗·χ⃗, in a circular binary of symmetric mass ratio ν at v, averaged over the orbit, at leading order
+    in the tidal coupling (exact in the spin): the energy flux into the horizon relative to the Newtonian flux
+    (32/5)ν²v¹⁰ and its v-derivative at fixed spin (what the energy balance takes), the rate of the spin's magnitude
+    S = X²|χ⃗| (the angular momentum absorbed along χ̂) and of the mass (dm/dt = (32/5)ν²v¹⁰ F̂_H).
 
-    Alvi 2001 (gr-qc/0107080), Eqs. (10) and (21): Ṁ = φ̇ I₀ (φ̇ − Ω_H) with the tidal field's rotation φ̇ = Ω = v³
-    (the spin along ℓ̂), the horizon's Ω_H = a/(2 r_H), r_H = m(1 + √(1 − a²)), and I₀ = (16/5) ν² v¹² X⁴
-    (1 + √(1 − a²))(1 + 3a²) (M = 1) (the quantities as PostNewtonian.jl's ``tidal_heating`` writes them); in the
-    test-mass limit X → 1 the v⁵ term is Tagoshi, Mano & Takasugi 1997's −(1/4)(q + 3q³) (gr-qc/9711072) and the
-    nonspinning v⁸ term Poisson & Sasaki 1995's 1 (gr-qc/9412027); summed over two nonspinning holes,
-    X₁⁴ + X₂⁴ = 1 − 4ν + 2ν², Nagar & Akcay 2012's leading order (arXiv:1112.2840).
+    Alvi 2001 (gr-qc/0107080): the companion's quadrupolar tidal field, decomposed in harmonics m about the spin
+    axis, each rotating at ω = mφ̇, gives dm/dt = φ̇ I₀ (φ̇ − Ω_H), dS/dt = I₀ (φ̇ − Ω_H) (his Eq. (21)), with
+    I₀ = (16/5) ν² v¹² X⁴ (1 + κ) sin²θ (1 − ¾χ² + (15/4)χ² sin²θ) (his Eq. (10); M = 1; PostNewtonian.jl's
+    ``tidal_heating`` writes them so), κ = √(1 − χ²), r_H = X(1 + κ), Ω_H = χ/(2 r_H), θ the angle between χ̂ and
+    the companion.  That is the sum over m of C A_|m| |Y₂ₘ(θ)|² (mφ̇)(mφ̇ − mΩ_H) (and m(mφ̇ − mΩ_H) for dS/dt),
+    C = (4π/15)(16/5)ν²v¹²X⁴(1 + κ), with A₁ = 1 − ¾χ², A₂ = 1 + 3χ²: the m-dependence of Teukolsky & Press
+    1974's low-frequency horizon absorption, ∏ₙ₌₁² (n²κ² + m²χ²)/4, which also gives A₀ = κ⁴.  With the spin
+    along ℓ̂ the field rotates rigidly (θ = π/2, φ̇ = Ω = v³).  With the spin tilted, cos ι = ℓ̂·χ̂ = c, it does not
+    (θ changes along the orbit; Alvi's rigid rotation at φ̇ = Ω cos ι / sin²θ, which PostNewtonian.jl evaluates at
+    each instant, leaves that out: for a hole of vanishing spin tilted by ι it averages to |cos ι| of the
+    nonspinning hole's absorption, where that of a Schwarzschild hole, (16/45) m⁶ ⟨Ė_ab Ė^ab⟩, does not depend on
+    any axis).  Here the field's harmonics about ℓ̂, m′ = 0 (static) and ±2 (ω = ±2Ω), are turned to the spin's
+    axis with Wigner's d²ₘₘ′(ι), and each (m, ω) absorbs as above, ω(ω − mΩ_H) A_|m| and m(ω − mΩ_H) A_|m|; the
+    average over the orbit sums them with weights |d²ₘ₂|²/8 (twice, for m′ = ±2) and |d²ₘ₀|²/12:
+
+        dm/dt = C′[Ω² G − Ω Ω_H c H/2],   dS/dt = C′[Ω c H/2 − Ω_H L/8],   C′ = (16/5)ν²v¹²X⁴(1 + κ), Ω = v³,
+        G = 1 − ¾χ² + (15/4)a² + ⅜(χ² − a²)²,   H = 2 + (9/4)χ² + (15/4)a²,
+        L = 4(1 + c²) + χ²(33/4 + (9/2)c² + (45/4)c⁴);
+
+    so F̂_H = ½X⁴(1 + κ) G v⁸ − ⅛ X³ a H v⁵.  Along ℓ̂ (a = ±χ) these are Alvi's I₀(1 + 3χ²) ν²v¹²… exactly:
+    F̂_H = −¼X³a(1 + 3a²)v⁵ + ½X⁴(1 + κ)(1 + 3a²)v⁸, whose test-mass limit X → 1 is Tagoshi, Mano & Takasugi
+    1997's −¼(q + 3q³)v⁵ (gr-qc/9711072) and, without spin, Poisson & Sasaki 1995's v⁸ (gr-qc/9412027); for
+    χ → 0, G = H/2 = 1 at any tilt.  tests/test_pn_horizon.py checks the average against the orbit average of the
+    unaveraged sum, computed from the spin-frame harmonics and their time derivatives.
+
+    Terms of order ω² are Alvi's (complete for a nonrotating hole; for a rotating one the response's own frequency
+    dependence adds a term of that order, Chatziioannou, Poisson & Yunes 2013, arXiv:1211.1686, not included).  A
+    hole without spin (χ = 0) takes its axis along ℓ̂ (c = 1): it is spun up along ℓ̂ at dS/dt = C′Ω.
     """
-    kappa = math.sqrt(max(0.0, 1.0 - a * a))
-    return {
-        # v⁵: −(1/4) X³ a (1 + 3a²), the horizon's rotation (negative: energy extracted for a > 0)   [Alvi 2001]
-        5: -0.25 * X * X * X * a * (1.0 + 3.0 * a * a),
-        # v⁸: (1/2) X⁴ (1 + √(1 − a²))(1 + 3a²), the orbit's                                           [Alvi 2001]
-        8: 0.5 * (X * X) * (X * X) * (1.0 + kappa) * (1.0 + 3.0 * a * a),
-    }
+    chi = math.sqrt(chi_sq)
+    kappa = math.sqrt(max(0.0, 1.0 - chi_sq))
+    c = a / chi if chi > 0.0 else 1.0
+    a_sq = a * a
+    d = chi_sq - a_sq
+    c_sq = c * c
+    G = 1.0 - 0.75 * chi_sq + 3.75 * a_sq + 0.375 * (d * d)
+    H = 2.0 + 2.25 * chi_sq + 3.75 * a_sq
+    L = 4.0 * (1.0 + c_sq) + chi_sq * (8.25 + c_sq * (4.5 + 11.25 * c_sq))
+    v3 = v * v * v
+    v5 = v3 * v * v
+    v10 = v5 * v5
+    X3 = X * X * X
+    f8 = 0.5 * X3 * X * (1.0 + kappa) * G * (v5 * v3)   # v⁸: the orbit's                       [Alvi 2001, Eq. (21)]
+    f5 = -0.125 * X3 * a * H * v5                       # v⁵: the horizon's rotation Ω_H          [Alvi 2001, Eq. (21)]
+    fh = f8 + f5
+    sdot = 3.2 * (nu * nu) * X3 * (v10 * v * v) * (0.5 * X * (1.0 + kappa) * v3 * c * H - 0.0625 * chi * L)
+    return fh, 8.0 * f8 + 5.0 * f5, sdot, 6.4 * (nu * nu) * v10 * fh
 
 
 def flux_series(X1, kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0):

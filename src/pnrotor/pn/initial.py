@@ -14,72 +14,19 @@ on this path, and never in the numba code.
 """
 
 import math
-import numbers
-import sys
 
 import numpy as np
+
+from pnrotor.values import BOOLS as _BOOLS, TEXT as _TEXT, finite as _finite, in_unit  # noqa: F401 - pn's names
+from pnrotor.values import integer as _integer, positive as _positive, real as _real  # noqa: F401
 
 MTSUN_SI = 4.9254909476412675e-06
 """G M☉ / c³ in seconds (IAU 2015 nominal GM☉ = 1.3271244e20 m³/s², c = 299792458 m/s)."""
 
-BOOLS = (bool, np.bool_)
-"""Refused where a number is expected (float(True) would be 1.0)."""
-TEXT = (str, bytes, bytearray)
-"""Refused where a number is expected too (float("30") would be 30.0): numbers only, as ``evolve_many`` takes them."""
-
-
-def real(x):
-    """Whether x is a real number (Python's or numpy's), not a bool."""
-    return isinstance(x, numbers.Real) and not isinstance(x, BOOLS)
-
-
-def finite(x):
-    """Whether the real number x is finite as a float (an int beyond any float, 10**400, is not)."""
-    try:
-        return math.isfinite(x)
-    except OverflowError:
-        return False
-
-
-def integer(x):
-    """Whether x is an integer (Python's or numpy's), not a bool."""
-    return isinstance(x, (int, np.integer)) and not isinstance(x, BOOLS)
-
-
-def in_unit(x, unit, name, what):
-    """x itself, or an astropy Quantity's value in ``unit`` (an astropy unit name; None: no Quantity taken), else a
-    ValueError "`name` must be `what`" naming the Quantity's unit."""
-    u = sys.modules.get("astropy.units")   # a Quantity exists only if its module was imported
-    if u is None or not isinstance(x, u.Quantity):
-        return x
-    try:
-        if unit is None:
-            raise u.UnitsError
-        return x.to_value(getattr(u, unit))
-    except u.UnitsError:
-        given = x.unit.to_string() or "dimensionless"
-        raise ValueError(f"{name} must be {what}, got an astropy Quantity in {given}"
-                         + (f" (not convertible to {unit})" if unit else "")) from None
-
-
-def positive(x, unit, name, what):
-    """A float from a float (already in `unit`) or an astropy Quantity converted to `unit` (an astropy unit
-    name); must be finite and > 0, else a ValueError "`name` must be a finite positive `what`"."""
-    x = in_unit(x, unit, name, f"a finite positive {what}")
-    try:
-        if isinstance(x, BOOLS + TEXT):
-            raise TypeError
-        x = float(x)
-    except (TypeError, ValueError, OverflowError):   # OverflowError: an int beyond any float (10**400)
-        raise ValueError(f"{name} must be a finite positive {what}, got {x!r}") from None
-    if not math.isfinite(x) or x <= 0.0:
-        raise ValueError(f"{name} must be a finite positive {what}, got {x!r}")
-    return x
-
 
 def solar_masses(m, name="mass"):
     """A mass in M☉ from a float (already M☉) or an astropy Quantity; must be finite and > 0."""
-    return positive(m, "M_sun", name, "mass")
+    return _positive(m, "M_sun", name, "mass")
 
 
 def hertz(f, name="frequency", allow_none=False):
@@ -88,12 +35,12 @@ def hertz(f, name="frequency", allow_none=False):
         if allow_none:
             return None
         raise ValueError(f"{name} is required")
-    return positive(f, "Hz", name, "frequency in Hz")
+    return _positive(f, "Hz", name, "frequency in Hz")
 
 
 def seconds(dt, name="time step"):
     """A time in seconds from a float or an astropy Quantity; must be finite and > 0."""
-    return positive(dt, "s", name, "time in seconds")
+    return _positive(dt, "s", name, "time in seconds")
 
 
 def total_mass_seconds(m1, m2):
@@ -126,7 +73,7 @@ def _vec3(a, name):
     """Three finite floats from a 3-vector (plain Python floats: cheaper than numpy for three numbers)."""
     try:
         x, y, z = a
-        if isinstance(x, BOOLS) or isinstance(y, BOOLS) or isinstance(z, BOOLS):
+        if isinstance(x, _BOOLS) or isinstance(y, _BOOLS) or isinstance(z, _BOOLS):
             raise TypeError
         x, y, z = float(x), float(y), float(z)
     except (TypeError, ValueError, OverflowError):

@@ -6,8 +6,8 @@ import sys
 
 import numpy as np
 
+from .. import values
 from ..parameters import COLUMNS, DEFAULTS, REQUIRED
-from . import initial as _ini
 
 
 def per_binary(x, n, name, shape=(), unit=None):
@@ -31,7 +31,7 @@ def numbers(x, name, shape, unit=None):
         raise ValueError(f"{name} has {count} masked entr{'ies' if count > 1 else 'y'} (a numpy masked array): "
                          f"evolve_many would compute the values hidden under the mask; drop those binaries or fill "
                          f"them (x.filled(...))")
-    x = _ini.in_unit(x, unit, name, "numbers" if unit is None else f"numbers (in {unit})")
+    x = values.in_unit(x, unit, name, "numbers" if unit is None else f"numbers (in {unit})")
     try:
         if _has_bool_or_text(x) or np.iscomplexobj(x):
             raise TypeError
@@ -66,7 +66,7 @@ def _has_bool_or_text(x):
         return x.dtype.kind in "bSU"
     if isinstance(x, (list, tuple)):
         return any(_has_bool_or_text(item) for item in x)
-    return isinstance(x, _ini.BOOLS + _ini.TEXT)
+    return isinstance(x, values.BOOLS + values.TEXT)
 
 
 def _shape(x):
@@ -99,7 +99,8 @@ def is_frame(x):
     return pandas is not None and isinstance(x, pandas.DataFrame)
 
 
-FRAME_SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order")
+FRAME_SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order",
+                "horizon_absorption")
 """The columns of a batch table that a DataFrame may hold for the options evolve_many shares (one value each)."""
 
 

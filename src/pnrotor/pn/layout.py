@@ -15,6 +15,9 @@ Y_CHI2 = 4      # 4, 5, 6
 Y_R = 7         # 7, 8, 9, 10  (w, x, y, z)
 Y_PHI = 11
 N_PRECESSING = 12
+# with horizon absorption (P_HORIZON ≠ 0) the precessing state carries the masses too: [v, χ₁, χ₂, R, Φ, m₁, m₂]
+Y_M1 = 12
+Y_M2 = 13
 # aligned state
 YA_V = 0
 YA_PHI = 1
@@ -50,7 +53,10 @@ P_ISS1 = P_VARPI2 + N_SO        # body 1: 2PN a_j, a_jn, a_in; 3PN b_j, b_jn, b_
 P_ISS2 = P_ISS1 + 8             # ... body 2
 P_OMEGA_L = P_ISS2 + 8          # 0: Ω_ℓ from −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| (LALSuite); 1: its spin-orbit part from ⟨ϖ n̂⟩ (Bohé+)
 # the series N, D, Ê′, each a header and its coefficients (series.fold_and_store)
-P_NUM = P_OMEGA_L + 1
+P_HORIZON = P_OMEGA_L + 1       # horizon absorption: 0 none; 1 F̂_H added to N (T1, T4); −1 subtracted from D (T5)
+P_HX1 = P_HORIZON + 1           # with horizon absorption: X₁ if body 1 has a horizon (Λ₁ = 0), 0 for a neutron star
+P_HX2 = P_HX1 + 1               # ... body 2
+P_NUM = P_HX2 + 1
 P_DEN = P_NUM + SERIES_SLOTS
 P_EP = P_DEN + SERIES_SLOTS
 P_SIZE = P_EP + SERIES_SLOTS

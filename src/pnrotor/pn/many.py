@@ -39,13 +39,11 @@ import gc
 import math
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 
 from .. import numba_cache, threads
-from ..history import short_repr
 from ..ode.common import (FV_TEVENT, IV_EVENT, IV_NFEV, IV_NOUT, IV_NSEG, IV_NSTEPS, IV_STATUS, OUT_FINAL,
                           default_hook, events_function, function_addresses)
 from ..ode.dop853 import core as dop853_core
@@ -58,6 +56,7 @@ from .sampling import fill_history, output_mode
 from .settings import Binaries, binary_settings, options, population_settings, target_v
 from .inputs import from_frame, is_frame, per_binary, population_size, target_table
 from .layout import EV_V_END, N_EVENTS, P_VEND
+from pnrotor.results.populations import INSPIRAL_ENDS, STATE, Population, spin_angles
 
 __all__ = ["evolve_many", "Population", "spin_angles", "INSPIRAL_ENDS"]
 
@@ -69,182 +68,9 @@ dispatch, and at most that left for one thread at the end (or after an interrupt
 
 
 
-INSPIRAL_ENDS = ("v_max", "energy_balance", "vdot_nonpositive", "vdot_peak", "vdot_divergent")
-"""Terminations that end an inspiral (:mod:`pnrotor.pn.evolve`): a binary integrated to the end of its inspiral
-(no target frequency) reached it with one of these; the others (``max_steps``, ``step_underflow``, ``nonfinite``,
-``time_limit``, ``spin_magnitude``) stop it before."""
-
-STATE = ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat")
-"""The fields of a :class:`Population` that hold a state (NaN where the target was not reached)."""
-
 PER_BINARY = ("m1_Msun", "m2_Msun", "chi1", "chi2", "f_ref_Hz", "ell_hat", "n_hat", "kappa1", "kappa2", "lambda1",
               "lambda2", "f_end_Hz", "frequencies_Hz")
 """The inputs of a :class:`Population` given per binary (its other inputs are the options all binaries share)."""
-
-
-def spin_angles(chi1, chi2, ell_hat, m1, m2):
-    r"""θ₁, θ₂, φ₁₂, χ_eff and χ_p of spins ``chi1``, ``chi2`` and orbital direction ``ell_hat`` (arrays (..., 3),
-    inertial frame) and masses ``m1``, ``m2`` (broadcast against (...)) → dict of arrays (...):
-
-    * tilts θᵢ = atan2(|χᵢ × ℓ̂|, χᵢ·ℓ̂) ∈ [0, π], the angle between χᵢ and ℓ̂ (NaN where χᵢ = 0);
-    * φ₁₂ = atan2(ℓ̂·(χ₁ × χ₂), χ₁·χ₂ − (χ₁·ℓ̂)(χ₂·ℓ̂)) taken in [0, 2π]: the azimuth of χ₂'s projection on the
-      orbital plane minus that of χ₁'s, counterclockwise about ℓ̂ (LALSuite's and bilby's ``phi_12``; NaN where a
-      projection is zero);
-    * χ_eff = (m₁ χ₁·ℓ̂ + m₂ χ₂·ℓ̂)/(m₁ + m₂) (Ajith et al. 2011, PRL 106, 241101, Eq. (1));
-    * χ_p = max(χ_A⊥, q (4q + 3)/(4 + 3q) χ_B⊥), A the heavier body, B the lighter, q = m_B/m_A ≤ 1 and χᵢ⊥ =
-      |χᵢ × ℓ̂| (Schmidt, Ohme & Hannam 2015, PRD 91, 024043, Eq. (3.4)).
-    """
-    chi1, chi2, ell_hat = (np.asarray(x, dtype=np.float64) for x in (chi1, chi2, ell_hat))
-    m1, m2 = np.asarray(m1, dtype=np.float64), np.asarray(m2, dtype=np.float64)
-    along1, along2 = (np.einsum("...i,...i", chi, ell_hat) for chi in (chi1, chi2))
-    across1, across2 = (np.linalg.norm(np.cross(chi, ell_hat), axis=-1) for chi in (chi1, chi2))
-    with np.errstate(invalid="ignore"):
-        theta1, theta2 = (np.where(np.linalg.norm(chi, axis=-1) > 0.0, np.arctan2(across, along), np.nan)
-                          for chi, along, across in ((chi1, along1, across1), (chi2, along2, across2)))
-        phi12 = np.arctan2(np.einsum("...i,...i", ell_hat, np.cross(chi1, chi2)),
-                           np.einsum("...i,...i", chi1, chi2) - along1 * along2)
-        phi12 = np.where(across1 * across2 > 0.0, np.where(phi12 < 0.0, phi12 + 2.0 * np.pi, phi12), np.nan)
-        heavy = m1 >= m2
-        q = np.where(heavy, m2 / m1, m1 / m2)
-        chi_p = np.maximum(np.where(heavy, across1, across2),
-                           q * (4.0 * q + 3.0) / (4.0 + 3.0 * q) * np.where(heavy, across2, across1))
-    return {"theta1": theta1, "theta2": theta2, "phi12": phi12, "chi_eff": (m1 * along1 + m2 * along2) / (m1 + m2),
-            "chi_p": chi_p}
-
-
-class SpinAngles:
-    """The derived quantities of :func:`spin_angles` at each state, as properties, and the whole table as a pandas
-    DataFrame: shared by :class:`Population` and `pnrotor.batch.population.PopulationTable` (whose ``inputs`` hold
-    ``m1_Msun`` and ``m2_Msun`` per binary)."""
-
-    def derived(self):
-        """:func:`spin_angles` of the states (NaN where the target was not reached): dict of (N,) or (N, K)."""
-        shape = self.v.shape
-        m1, m2 = (self.inputs[key].reshape(self.inputs[key].shape + (1,) * (self.v.ndim - 1))
-                  for key in ("m1_Msun", "m2_Msun"))
-        return spin_angles(self.chi1, self.chi2, self.ell_hat, np.broadcast_to(m1, shape), np.broadcast_to(m2, shape))
-
-    theta1 = property(lambda self: self.derived()["theta1"], doc="tilt of χ₁ from ℓ̂ (rad; :func:`spin_angles`)")
-    theta2 = property(lambda self: self.derived()["theta2"], doc="tilt of χ₂ from ℓ̂ (rad; :func:`spin_angles`)")
-    phi12 = property(lambda self: self.derived()["phi12"], doc="φ₁₂ (rad; :func:`spin_angles`)")
-    chi_eff = property(lambda self: self.derived()["chi_eff"], doc="χ_eff (:func:`spin_angles`)")
-    chi_p = property(lambda self: self.derived()["chi_p"], doc="χ_p (:func:`spin_angles`)")
-
-    def to_pandas(self):
-        """A pandas DataFrame of the table, one row per binary (per binary and target with a list of frequencies:
-        columns ``binary`` and ``target``): the per-binary inputs (vectors at f_ref as ``chi1_ref_x`` …, a
-        target of the list as ``frequency_Hz``), the state (vectors as ``chi1_x`` …, ``R_w`` … ``R_z``),
-        ``termination``, ``reached``, ``message``, ``nsteps``, ``nfev``, the derived ``theta1``, ``theta2``,
-        ``phi12``, ``chi_eff``, ``chi_p``, and the states where the integrations stopped (``stopped_v`` …); the
-        options every binary shares in ``DataFrame.attrs``."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("to_pandas needs pandas: pip install 'pnrotor[pandas]'") from None
-
-        n, shape = len(self), self.v.shape
-        columns = {}
-        if self.v.ndim == 2:
-            columns["binary"], columns["target"] = (x.ravel() for x in np.indices(shape))
-
-        def add(name, x, per_binary=False):
-            x = np.asarray(x)
-            if per_binary and self.v.ndim == 2:
-                x = np.broadcast_to(x.reshape((n, 1) + x.shape[1:]), shape + x.shape[1:])
-            x = x.reshape((-1,) + x.shape[len(shape):])
-            if x.ndim == 1:
-                columns[name] = x
-            else:
-                for c, axis in zip(x.T, "wxyz" if x.shape[1] == 4 else "xyz"):
-                    columns[f"{name}_{axis}"] = c
-
-        if getattr(self, "name", None) is not None:
-            add("name", self.name, True)
-        shared = {}
-        for key, value in self.inputs.items():
-            if not (isinstance(value, np.ndarray) and value.shape[:1] == (n,)):
-                shared[key] = value
-            elif key == "frequencies_Hz":
-                add("frequency_Hz", value)
-            else:
-                add(key + "_ref" * (value.ndim == 2), value, True)
-        for key in STATE + ("termination", "reached", "message", "nsteps", "nfev"):
-            add(key, getattr(self, key))
-        for key, value in self.derived().items():
-            add(key, value)
-        for key in STATE:
-            add("stopped_" + key, self.stopped_at[key])
-        frame = pd.DataFrame(columns)
-        frame.attrs.update(shared)
-        return frame
-
-
-@dataclass
-class Population(SpinAngles):
-    """The states of :func:`evolve_many`: row i is binary i, with a second axis k over the target
-    frequencies when ``frequencies`` was given.
-
-    The state fields (t … ell_hat) hold the state at the target: the target frequency, or the end of the inspiral
-    where there is none.  Where ``reached`` is False they are NaN (an inspiral that ended first, an integration
-    stopped by the integrator's limits, or ``'invalid'``), and ``stopped_at`` holds the state where the integration
-    stopped.  Derived at the states (properties, :func:`spin_angles` for the formulas): ``theta1``, ``theta2``,
-    ``phi12``, ``chi_eff``, ``chi_p``; :meth:`to_pandas` gives them all as one DataFrame.
-
-    Attributes
-    ----------
-    t : (N,) or (N, K) time of the state in units of each binary's total mass M (t = 0 at f_ref)
-    t_seconds : the same in seconds
-    v, Phi : PN parameter and orbital phase (Φ = 0 at f_ref)
-    chi1, chi2 : (N, 3) or (N, K, 3) dimensionless spins, inertial frame
-    R : (N, 4) or (N, K, 4) unit orbital-frame rotor (n̂ = R x̂ R⁻¹, ℓ̂ = R ẑ R⁻¹)
-    ell_hat : (N, 3) or (N, K, 3) orbital angular momentum direction
-    termination : str — why the integration to that state stopped (:mod:`pnrotor.pn.evolve`): ``'f_max'`` or
-        ``'f_min'`` where the target frequency was reached, else why the inspiral ended first, or ``'invalid'``
-    reached : bool — whether the integration reached the target: termination ``'f_max'`` or ``'f_min'`` for a
-        target frequency, one of :data:`INSPIRAL_ENDS` for the end of the inspiral
-    message : str — the termination's message, or the error naming the bad input
-    nsteps, nfev : int — the step attempts and right-hand-side evaluations of the integration that gave the
-        state (one per binary and direction: the targets of a list share it; with nearer targets it keeps
-        dense output, 3 more evaluations per step than a single ``evolve``)
-    stopped_at : dict — the state fields (:data:`STATE`) where each integration stopped, reached or not (NaN where
-        ``'invalid'``); equal to the state fields where ``reached``
-    inputs : dict — the options shared by every binary, and per binary (arrays (N,) or (N, 3)): ``m1_Msun``,
-        ``m2_Msun``, ``chi1``, ``chi2`` (at f_ref), ``f_ref_Hz``, ``ell_hat``, ``n_hat``, ``kappa1``, ``kappa2``,
-        ``lambda1``, ``lambda2``, and the target, ``f_end_Hz`` (NaN: the end of the inspiral) or ``frequencies_Hz``
-        (N, K)
-    stats : dict — ``wall_time_s`` of the call and ``wall_time_integrate_s`` of its compiled loops (the rest is
-        Python: checks and parameter vectors)
-
-    Checked when built (:func:`pnrotor.hdf5.check`, by ``pnrotor.hdf5.ARRAYS["Population"]``): a ValueError names
-    every array of the wrong type, dtype or shape and every zero rotor.
-    """
-
-    t: np.ndarray
-    t_seconds: np.ndarray
-    v: np.ndarray
-    Phi: np.ndarray
-    chi1: np.ndarray
-    chi2: np.ndarray
-    R: np.ndarray
-    ell_hat: np.ndarray
-    termination: np.ndarray
-    reached: np.ndarray
-    message: np.ndarray
-    nsteps: np.ndarray
-    nfev: np.ndarray
-    stopped_at: dict
-    inputs: dict = field(default_factory=dict)
-    stats: dict = field(default_factory=dict)
-
-    __repr__ = short_repr
-
-    def __post_init__(self):
-        from pnrotor import hdf5
-
-        hdf5.check(self, "cannot build")   # the arrays' shapes, dtypes and rotors, by hdf5.ARRAYS["Population"]
-
-    def __len__(self):
-        return self.t.shape[0]
 
 
 @njit(nogil=True, cache=True)
@@ -402,7 +228,7 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
                 n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, approximant="T4", pn_order=3.5,
                 spin_orbit_order=None, spin_spin_order=None, atol=1e-12, rtol=0.0, rotor="coprecessing",
                 precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000,
-                lambda1=0.0, lambda2=0.0, tidal_order=None):
+                lambda1=0.0, lambda2=0.0, tidal_order=None, horizon_absorption=False):
     r"""Evolve N binaries from f_ref → :class:`Population` of their states at the end of the inspiral, at
     f_end or at a list of frequencies (module docstring), NaN where a binary did not reach its target (its
     ``reached`` False, the state where it stopped in ``stopped_at``).
@@ -414,9 +240,9 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
         ``m1``, ``m2``, ``chi1``, ``chi2`` (cells of three numbers, or ``"x,y,z"`` text), ``f_ref`` per binary;
         optional ``f_max`` (the state there, forward) or ``f_min`` (backward), at most one per row (NaN: none; with
         neither, the end of the inspiral), instead of f_end; optional columns of the shared options
-        (``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order``, ``precession``, ``atol``) holding
-        one value each (empty cells ignored), used as that keyword; ``sampling`` empty or ``final``; ``name``
-        ignored.  m2, chi1, chi2 and f_ref are then not given.
+        (``approximant``, ``pn_order``, ``spin_orbit_order``, ``spin_spin_order``, ``precession``, ``atol``,
+        ``tidal_order``, ``horizon_absorption``) holding one value each (empty cells ignored), used as that
+        keyword; ``sampling`` empty or ``final``; ``name`` ignored.  m2, chi1, chi2 and f_ref are then not given.
     m1, m2, f_ref : array_like (N,) or scalar
         Masses (M☉) and reference GW frequencies (Hz), as for :func:`~pnrotor.pn.evolve.evolve` (astropy
         Quantities are converted).  N is the length of the inputs given per binary (these, the spins, f_end, …,
@@ -439,8 +265,10 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
     lambda1, lambda2 : array_like (N,) or scalar
         Dimensionless tidal deformabilities Λᵢ (0 for black holes).
     approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, rotor, precession_phase_shift, \
-integrate_rotor, precession, max_steps, tidal_order
-        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
+integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
+        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries (with ``horizon_absorption`` every binary
+        is on the precessing state, its spins at the state's frequency changed by what the horizons absorbed; the
+        masses it leaves are not kept).
 
     The number of threads is :func:`pnrotor.threads.thread_count`'s (numba's: ``numba.set_num_threads``,
     ``NUMBA_NUM_THREADS``; at most :func:`pnrotor.threads.limit`'s).  Invalid shared
@@ -450,7 +278,8 @@ integrate_rotor, precession, max_steps, tidal_order
     shared = dict(approximant=approximant, pn_order=pn_order, spin_orbit_order=spin_orbit_order,
                   spin_spin_order=spin_spin_order, atol=atol, rtol=rtol, sampling="final", rotor=rotor,
                   precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
-                  precession=precession, max_steps=max_steps, tidal_order=tidal_order)
+                  precession=precession, max_steps=max_steps, tidal_order=tidal_order,
+                  horizon_absorption=horizon_absorption)
     backward = None   # a binary's target behind f_ref (f_min): by default where it lies below f_ref
     if is_frame(m1):
         m1, m2, chi1, chi2, f_ref, f_end, backward, lambda1, lambda2 = from_frame(

@@ -11,7 +11,8 @@ also compiled with ``fastmath={'contract'}`` and nothing else of fastmath: a pro
 into one FMA (one rounding instead of two, where the CPU has FMA; 10–15% faster, measured), nothing is
 reordered, and inf and nan propagate as without it.
 
-* :func:`rhs_precessing` — state ``y = [v, χ₁(3), χ₂(3), R(4), Φ]`` (12 components);
+* :func:`rhs_precessing` — state ``y = [v, χ₁(3), χ₂(3), R(4), Φ]`` (12 components; with horizon absorption 14,
+  the masses m₁, m₂ in units of M at f_ref appended);
 * :func:`rhs_aligned` — nonspinning and aligned spins, ``y = [v, Φ]``: ℓ̂ and the spins are constant,
   the spin equations and the precession are not integrated at all, and the frame is reconstructed
   exactly as R(t) = R₀ exp(Φ ẑ/2).
@@ -28,9 +29,14 @@ Equations (units G = c = M = 1, t in units of M)
 * Energy balance: v̇ = −F/E′ = (32ν/5) v⁹ N(v)/D(v), with E = −(νv²/2)Ê and F = (32/5)ν²v¹⁰F̂
   (:mod:`~pnrotor.pn.energy`, :mod:`~pnrotor.pn.flux`), N and D the approximant's
   (:mod:`~pnrotor.approximants`: TaylorT1 N = F̂, D = Ê′; TaylorT4 N = [F̂/Ê′], D = 1; TaylorT5 N = 1,
-  D = [Ê′/F̂]), with neutron-star tides to first order in Λᵢ (:func:`pnrotor.pn.vdot.add_tides`).
+  D = [Ê′/F̂]), with neutron-star tides to first order in Λᵢ (:func:`pnrotor.pn.vdot.add_tides`).  With horizon
+  absorption (p[P_HORIZON] ≠ 0, precessing state only) the flux into both horizons (a body with Λᵢ > 0, a neutron
+  star, has none), averaged over the orbit (:func:`pnrotor.pn.flux.horizon_rates`), is computed at the current spins
+  in the right-hand side and the events and added at first order: N + F̂_H (T1, T4), D − F̂_H (T5).
 
-* Spins: χ̇ᵢ = Ωᵢ × χᵢ (:mod:`~pnrotor.pn.precession`).
+* Spins: χ̇ᵢ = Ωᵢ × χᵢ (:mod:`~pnrotor.pn.precession`); with horizon absorption also + (Ṡᵢ/Xᵢ²) χ̂ᵢ − 2(ṁᵢ/Xᵢ) χᵢ,
+  the angular momentum and mass each horizon absorbs (Ṡᵢ, taken from the orbit, enters Ω_ℓ too), and the masses
+  ṁᵢ are integrated as y[Y_M1], y[Y_M2].
 * Frame: dR/dt = ½ Ω R with ℓ̂ = R ẑ R⁻¹, n̂ = R x̂ R⁻¹ (Boyle 2016, arXiv:1604.08139,
   eq:integrate-spinor; R unnormalized, its norm cancels in R v R⁻¹).  The orbital frame rotates with
   Ω = Φ̇ ℓ̂ + Ω_ℓ, Ω_ℓ = −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| the orbit-averaged precession of the orbital plane.
@@ -80,7 +86,8 @@ from numba import njit
 from .layout import (EV_ENERGY, EV_POLE, EV_SPIN1, EV_SPIN2, EV_V_END, EV_VDOT, EV_VDOT_PEAK, P_DEN, P_DEN_EPS, P_EP,
                      N_SS, P_ISS1, P_ISS2, P_L, P_NU, P_NUM, P_OMEGA_L, P_ROTOR, P_SHIFT, P_SO1, P_SO2, P_SPINTOL,
                      P_SS1, P_SS2, P_VARPI1, P_VARPI2, P_VDOT0, P_VEND, P_W1, P_W2, P_X1, P_X2,
-                     Y_PHI, Y_R, Y_V, YA_PHI, YA_V)
+                     P_HORIZON, P_HX1, P_HX2, Y_M1, Y_M2, Y_PHI, Y_R, Y_V, YA_PHI, YA_V)
+from .flux import horizon_rates
 from .series import eval_series
 
 @njit(cache=True, inline="always")
@@ -118,6 +125,23 @@ def _folded(p, off, v, lnv):
 
 
 @njit(cache=True, inline="always")
+def horizon_flux(p, v, a1, s11, a2, s22):
+    """(F̂_H, v ∂F̂_H/∂v) of both horizons (:func:`pnrotor.pn.flux.horizon_rates`) at v, with ℓ̂·χᵢ = aᵢ, χᵢ² = sᵢᵢ."""
+    f1, f1_v, _, _ = horizon_rates(p[P_HX1], p[P_NU], v, a1, s11)
+    f2, f2_v, _, _ = horizon_rates(p[P_HX2], p[P_NU], v, a2, s22)
+    return f1 + f2, f1_v + f2_v
+
+
+@njit(cache=True, inline="always")
+def add_horizon(p, f, f_v, num, num_v, den, den_v):
+    """(N, vN′, D, vD′) of v̇ with the flux into the horizons F̂_H (and v ∂F̂_H/∂v) in the energy balance at first
+    order: added to N (T1: F̂ + F̂_H; T4: F̂/Ê′ + F̂_H, p[P_HORIZON] = 1), subtracted from D = [Ê′/F̂] (T5, −1)."""
+    if p[P_HORIZON] > 0.0:
+        return num + f, num_v + f_v, den, den_v
+    return num, num_v, den - f, den_v - f_v
+
+
+@njit(cache=True, inline="always")
 def _vdot(p, v, num, den):
     """v̇ = (32ν/5) v⁹ N/D from N(v) and D(v) (module docstring)."""
     v3 = v * v * v
@@ -138,7 +162,15 @@ def rhs_precessing(t, y, p, dydt):
     X2 = p[P_X2]
     b = _spin_basis(y, lx, ly, lz)
     a1, a2 = b[0], b[1]
-    vdot = _vdot(p, v, _series(p, P_NUM, v, lnv, b)[0], _series(p, P_DEN, v, lnv, b)[0])
+    num = _series(p, P_NUM, v, lnv, b)[0]
+    den = _series(p, P_DEN, v, lnv, b)[0]
+    horizon = p[P_HORIZON] != 0.0
+    s1 = s2 = m1 = m2 = 0.0
+    if horizon:   # the flux into the horizons and the spins' and masses' rates (flux.horizon_rates; none for a star)
+        f1, _, s1, m1 = horizon_rates(p[P_HX1], p[P_NU], v, a1, b[4])
+        f2, _, s2, m2 = horizon_rates(p[P_HX2], p[P_NU], v, a2, b[6])
+        num, _, den, _ = add_horizon(p, f1 + f2, 0.0, num, 0.0, den, 0.0)
+    vdot = _vdot(p, v, num, den)
     v2 = v * v
     v3 = v2 * v
     v5 = v3 * v2
@@ -183,6 +215,18 @@ def rhs_precessing(t, y, p, dydt):
     q2 = X2 * X2
     ex1, ey1, ez1 = d1x - so1 * (ly * c1z - lz * c1y), d1y - so1 * (lz * c1x - lx * c1z), d1z - so1 * (lx * c1y - ly * c1x)
     ex2, ey2, ez2 = d2x - so2 * (ly * c2z - lz * c2y), d2y - so2 * (lz * c2x - lx * c2z), d2z - so2 * (lx * c2y - ly * c2x)
+    if horizon:
+        # the angular momentum Ṡᵢ each horizon absorbs, along χ̂ᵢ (ℓ̂ for a hole without spin), is the orbit's (so it
+        # tilts ℓ̂ too, in Ω_ℓ); the mass ṁᵢ rescales χᵢ = Sᵢ/mᵢ²: χ̇ᵢ ∋ (Ṡᵢ/Xᵢ²) χ̂ᵢ − 2(ṁᵢ/Xᵢ) χᵢ
+        t1x, t1y, t1z = _along_spin(s1 / q1, b[4], c1x, c1y, c1z, lx, ly, lz)
+        t2x, t2y, t2z = _along_spin(s2 / q2, b[6], c2x, c2y, c2z, lx, ly, lz)
+        ex1, ey1, ez1 = ex1 + t1x, ey1 + t1y, ez1 + t1z
+        ex2, ey2, ez2 = ex2 + t2x, ey2 + t2y, ez2 + t2z
+        h1, h2 = 2.0 * m1 / X1, 2.0 * m2 / X2
+        d1x, d1y, d1z = d1x + t1x - h1 * c1x, d1y + t1y - h1 * c1y, d1z + t1z - h1 * c1z
+        d2x, d2y, d2z = d2x + t2x - h2 * c2x, d2y + t2y - h2 * c2y, d2z + t2z - h2 * c2z
+        dydt[Y_M1] = m1
+        dydt[Y_M2] = m2
     sx = q1 * ex1 + q2 * ex2
     sy = q1 * ey1 + q2 * ey2
     sz = q1 * ez1 + q2 * ez2
@@ -226,6 +270,15 @@ def rhs_precessing(t, y, p, dydt):
     dydt[5] = d2y
     dydt[6] = d2z
     dydt[Y_PHI] = phidot
+
+
+@njit(cache=True, inline="always")
+def _along_spin(rate, chi_sq, cx, cy, cz, lx, ly, lz):
+    """rate · χ̂ for the spin χ = (cx, cy, cz) of square norm chi_sq; rate · ℓ̂ where χ = 0."""
+    if chi_sq > 0.0:
+        g = rate / math.sqrt(chi_sq)
+        return g * cx, g * cy, g * cz
+    return rate * lx, rate * ly, rate * lz
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -310,6 +363,9 @@ def events_precessing(t, y, p, g):
     b = _spin_basis(y, lx, ly, lz)
     num, num_v = _series(p, P_NUM, v, lnv, b)
     den, den_v = _series(p, P_DEN, v, lnv, b)
+    if p[P_HORIZON] != 0.0:
+        f, f_v = horizon_flux(p, v, b[0], b[4], b[1], b[6])
+        num, num_v, den, den_v = add_horizon(p, f, f_v, num, num_v, den, den_v)
     g[EV_V_END] = v - p[P_VEND]
     g[EV_ENERGY] = _series(p, P_EP, v, lnv, b)[0]
     g[EV_VDOT] = num * den

@@ -19,15 +19,11 @@ one pass over the rows in blocks of 64 samples (buffers allocated once per call,
 """
 
 import math
-import os
-
-try:
-    import resource
-except ImportError:  # pragma: no cover - not Unix
-    resource = None
 
 import numpy as np
 from numba import njit
+
+from pnrotor import processes
 
 from . import layout
 
@@ -265,28 +261,10 @@ tracemalloc: 128 bytes on precessing runs, 56 on aligned ones, which store no ro
 1.2e5–3.5e5 samples either way) and the times in seconds the Evolution adds."""
 
 
-def available_memory():
-    """Bytes that can still be allocated now: the physical memory free, or less where the process's address space is
-    limited (``ulimit -v``, RLIMIT_AS) to less than its size plus that (inf where the OS says neither)."""
-    try:
-        free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (AttributeError, OSError, ValueError):  # pragma: no cover - not Linux
-        free = math.inf
-    limit = None if resource is None else resource.getrlimit(resource.RLIMIT_AS)[0]
-    if limit is not None and limit != resource.RLIM_INFINITY:
-        try:
-            with open("/proc/self/statm") as f:   # the address space's size, in pages
-                size = int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-        except OSError:  # pragma: no cover - not Linux
-            return free
-        free = min(free, max(limit - size, 0))
-    return free
-
-
 def _check_memory(n, s):
     """ValueError naming ``sampling`` if ``n`` samples of run ``s`` would not fit in the memory available."""
     need = n * PEAK_BYTES_PER_SAMPLE["aligned" if s.use_aligned else "precessing"]
-    free = available_memory()
+    free = processes.available_memory()
     if not need < free:
         what = f"{s.sampling_value!r} s" if s.sampling == "dt" else f"('per_orbit', {s.sampling_value!r})"
         stream = (", or write the history to a file block by block: pnrotor.hdf5.write(path, pnrotor.stream(m1, m2, "

@@ -19,8 +19,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import initial as _ini
+from .. import values
 from ..approximants import normalize_approximant
+from . import initial as _ini
 from .series import MAX_ORDER
 
 MAX_SO_ORDER = 4.0
@@ -87,8 +88,9 @@ class Settings:
 
     @property
     def use_aligned(self):
-        """Whether the run integrates only [v, Φ] (nonspinning or aligned spins, no integrate_rotor)."""
-        return self.spin_content != "precessing" and not self.integrate_rotor
+        """Whether the run integrates only [v, Φ] (nonspinning or aligned spins, neither integrate_rotor nor
+        horizon_absorption, whose spins change)."""
+        return self.spin_content != "precessing" and not (self.integrate_rotor or self.horizon_absorption)
 
     def inputs(self):
         """`Evolution.inputs`: every input, with units in the key names; only floats, ints, bools, strings and
@@ -159,14 +161,14 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
     if rotor not in ROTORS:
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     mode, sval = parse_sampling(sampling)
-    if not (_ini.real(atol) and _ini.real(rtol) and _ini.finite(atol) and _ini.finite(rtol) and atol > 0.0
+    if not (values.real(atol) and values.real(rtol) and values.finite(atol) and values.finite(rtol) and atol > 0.0
             and rtol >= 0.0):
         raise ValueError(f"atol must be > 0 and rtol >= 0, both finite numbers; got atol = {atol!r}, rtol = {rtol!r}")
-    if not (_ini.integer(max_steps) and 1 <= max_steps <= MAX_STEPS):
+    if not (values.integer(max_steps) and 1 <= max_steps <= MAX_STEPS):
         raise ValueError(f"max_steps must be an integer from 1 to {MAX_STEPS}, got {max_steps!r}")
-    if not isinstance(integrate_rotor, _ini.BOOLS):
+    if not isinstance(integrate_rotor, values.BOOLS):
         raise ValueError(f"integrate_rotor must be True or False, got {integrate_rotor!r}")
-    if precession_phase_shift is not None and not isinstance(precession_phase_shift, _ini.BOOLS):
+    if precession_phase_shift is not None and not isinstance(precession_phase_shift, values.BOOLS):
         raise ValueError(f"precession_phase_shift must be None (on at spin-orbit order >= 3), True or False, got "
                          f"{precession_phase_shift!r}")
     if precession not in PRECESSION:
@@ -176,8 +178,11 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
         precession_phase_shift = False
     if precession_phase_shift is None:
         precession_phase_shift = so_order >= 3.0
-    if not isinstance(horizon_absorption, _ini.BOOLS):
+    if not isinstance(horizon_absorption, values.BOOLS):
         raise ValueError(f"horizon_absorption must be True or False, got {horizon_absorption!r}")
+    if horizon_absorption and precession == "instantaneous":
+        raise ValueError("horizon_absorption needs the orbit-averaged precession ('averaged' or 'averaged_varpi'): its "
+                         "flux into the horizons is averaged over the orbit; got precession='instantaneous'")
     return Options(approximant, pn_order, so_order, ss_order, tidal_order, atol, rtol, mode, sval, rotor,
                    precession_phase_shift, integrate_rotor, precession, int(max_steps), bool(horizon_absorption))
 
@@ -196,10 +201,6 @@ def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, 
     lambda2 = _nonnegative(lambda2, "lambda2", _LAMBDA)
     M_sec, X1, v0, v_min, v_max = frequencies(m1, m2, f_ref, f_min, f_max)
     spin_content, c1, c2 = _spin_content(c1, c2, ell)
-    if o.horizon_absorption and (spin_content == "precessing" or o.integrate_rotor):
-        raise ValueError("horizon_absorption takes nonspinning binaries and spins along ell_hat (the flux into a "
-                         "tilted horizon, averaged over the orbit, is not implemented); these spins precess"
-                         if spin_content == "precessing" else "horizon_absorption needs integrate_rotor=False")
     return Settings(m1, m2, c1, c2, f_ref, f_min, f_max, ell, n, kappa1, kappa2, lambda1, lambda2, *o, M_sec, X1,
                     X1 * (1.0 - X1), v0, v_min, v_max, _frame_rotor(ell.tobytes() + n.tobytes()).copy(), spin_content)
 
@@ -294,7 +295,7 @@ def population_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_h
         for i in np.flatnonzero(ok & ~same).tolist():
             R0[i] = _frame_rotor(frames[i].tobytes())
     return Binaries(M_sec, X1, X1 * (1.0 - X1), v0, np.where(has_min, v_min, np.nan), np.where(has_max, v_max, 1.0),
-                    c1, c2, ell, R0, ~precessing & (not o.integrate_rotor), ok)
+                    c1, c2, ell, R0, ~precessing & (not (o.integrate_rotor or o.horizon_absorption)), ok)
 
 
 @functools.lru_cache(maxsize=16)
@@ -412,7 +413,7 @@ def _order(x, name, lo, hi):
 
 def _float_or_nan(x):
     """float(x), or NaN for what is not a real number: a bool, text, None, an int beyond any float (10**400)."""
-    if isinstance(x, _ini.BOOLS + _ini.TEXT):
+    if isinstance(x, values.BOOLS + values.TEXT):
         return math.nan
     try:
         return float(x)
@@ -462,11 +463,11 @@ def parse_sampling(sampling):
         if key == "dt":
             return "dt", _ini.seconds(val, "sampling dt")
         if key == "per_orbit":
-            if not (_ini.real(val) and 1 <= val <= MAX_PER_ORBIT and val == int(val)):   # no NaN, inf, 10**400
+            if not (values.real(val) and 1 <= val <= MAX_PER_ORBIT and val == int(val)):   # no NaN, inf, 10**400
                 raise ValueError(f"sampling per_orbit must be an integer from 1 to 2^53, got {val!r}")
             return "per_orbit", int(val)
         raise ValueError(f"unknown sampling key {key!r}: sampling must be {SAMPLING_FORMS}; got {sampling!r}")
     # a bare number or Quantity: Δt in seconds
-    if not (_ini.real(sampling) or hasattr(sampling, "unit")):
+    if not (values.real(sampling) or hasattr(sampling, "unit")):
         raise ValueError(f"sampling must be {SAMPLING_FORMS}; got {sampling!r}")
     return "dt", _ini.seconds(sampling, "sampling dt")

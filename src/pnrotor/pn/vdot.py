@@ -1,5 +1,5 @@
 r"""How the approximants form v̇ (:mod:`pnrotor.approximants`): their v̇ functions, and the series N, D and Ê′ of
-v̇ = (32ν/5) v⁹ N/D built with them, tides and the horizon flux included, which the parameter vector holds
+v̇ = (32ν/5) v⁹ N/D built with them, tides included, which the parameter vector holds
 (:mod:`pnrotor.pn.system`).
 
 A v̇ function is an ``@njit`` function of :data:`VDOT_SIG`, called by address from one compiled kernel
@@ -160,16 +160,10 @@ def add_tides(a, E_raw, F_raw, kmax, N, D, Ep):
                 series[..., k, 0, 0] += terms[k]
 
 
-def add_horizon_flux(a, horizon, N, D):
-    """N, D of the :class:`~pnrotor.approximants.Approximant` a with the flux into the horizons F̂_H = {k: c}
-    (:func:`pnrotor.pn.flux.horizon_flux`) added to the energy balance at first order: F̂ + F̂_H in N ('as_is', 'N':
-    T1, T4), D − F̂_H ('D': T5, D = Ê′/F̂ re-expanded); new arrays (the given ones may be shared)."""
+def horizon_sign(a):
+    """p[P_HORIZON] of the :class:`~pnrotor.approximants.Approximant` a with horizon absorption: 1 where the flux into
+    the horizons F̂_H joins F̂ in N ('as_is', 'N': T1, T4), −1 where it leaves D = [Ê′/F̂] ('D': T5)
+    (:func:`pnrotor.pn.rhs.add_horizon`); a ValueError for an approximant that takes none."""
     if a.tides is None:
         raise ValueError(f"approximant {a.name} takes no horizon_absorption")
-    N, D = N.copy(), D.copy()
-    for k, c in horizon.items():
-        if a.tides == "D":
-            D[k, 0, 0] -= c
-        else:
-            N[k, 0, 0] += c
-    return N, D
+    return -1.0 if a.tides == "D" else 1.0

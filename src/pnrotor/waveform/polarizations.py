@@ -20,7 +20,6 @@ LALSuite's, F₊(0) h₊(ψ) + F×(0) h×(ψ) = F₊(ψ) h₊ + F×(ψ) h× for 
 """
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -52,28 +51,3 @@ def polarizations(data, ell_m, inclination, phi, psi=0.0):
         c, s = math.cos(2.0 * psi), math.sin(2.0 * psi)
         hp, hc = hp * c - hc * s, hc * c + hp * s
     return hp, hc
-
-
-@dataclass(eq=False)
-class Polarizations:
-    """h₊, h× of one run seen from one direction, as strain (``pnrotor.stream(…).polarizations(…)``; the arrays of
-    ``pnrotor.polarizations``).
-
-    Attributes
-    ----------
-    t_seconds : (N,) times in s (t = 0 at f_ref)
-    h_plus, h_cross : (N,) strain at ``distance_Mpc``
-    inclination, phi_ref : the direction (ι, π/2 − φ_ref) of the inertial frame they are seen from (radians)
-    distance_Mpc : the distance
-    inputs : every input of the evolution and of the modes summed (ell_max, amplitude_order)
-
-    ``pnrotor.hdf5.write(path, polarizations)`` stores them (kind ``Polarizations``, docs/hdf5-schema.md).
-    """
-
-    t_seconds: np.ndarray
-    h_plus: np.ndarray
-    h_cross: np.ndarray
-    inclination: float
-    phi_ref: float
-    distance_Mpc: float
-    inputs: dict = field(default_factory=dict)

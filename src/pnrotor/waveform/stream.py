@@ -10,7 +10,7 @@ t = kΔt of ``sampling=Δt`` and nothing is computed per sample until asked:
 * :func:`stream` → :class:`Stream`; its :meth:`~Stream.evolution`, :meth:`~Stream.modes` and
   :meth:`~Stream.polarizations` → :class:`Streamed`: ``block(lo, hi)`` the result of the samples lo … hi−1 (an
   :class:`~pnrotor.pn.evolve.Evolution`, :class:`~pnrotor.waveform.modes.Modes` or
-  :class:`~pnrotor.waveform.polarizations.Polarizations` of those samples alone), ``compute()`` all of them in
+  :class:`~pnrotor.results.Polarizations` of those samples alone), ``compute()`` all of them in
   memory (checked against the memory available first), and ``pnrotor.hdf5.write(path, streamed)`` (or
   ``Batch.add``) writes them 2¹⁷ samples at a time into chunked datasets: a file larger than memory, in bounded
   memory (~160 MB of modes a block for ℓ ≤ 8, 2 MB of polarizations);
@@ -49,7 +49,7 @@ import time
 import numpy as np
 from numba import njit
 
-from pnrotor import threads
+from pnrotor import processes, threads
 from pnrotor.pn import initial as _ini
 from pnrotor.pn import sampling as _sampling
 from pnrotor.pn.evolve import OPTIONS, Evolution, integrate
@@ -57,11 +57,12 @@ from pnrotor.pn.sampling import MODE_ALIGNED, fill_history
 from pnrotor.pn.settings import settings
 from pnrotor.waveform import amplitudes as _amp
 from pnrotor.waveform.layout import mode_index, n_modes
-from pnrotor.waveform.modes import (ELL_MAX, Modes, _angle, _scale, check_arguments, check_memory_flag, spins_and_frame,
-                                   tides_of, wave_inputs)
+from pnrotor.results.waves import Modes, Polarizations, angle
+from pnrotor.values import real
+from pnrotor.waveform.distance import scale as _scale
+from pnrotor.waveform.modes import ELL_MAX, check_arguments, check_memory_flag, spins_and_frame, tides_of, wave_inputs
 from pnrotor.waveform import polarizations as _pol
 from pnrotor.waveform.modes import modes as modes_of_run
-from pnrotor.waveform.polarizations import Polarizations
 from pnrotor.waveform.wigner import _CHUNK, _store
 
 __all__ = ["stream", "Stream", "Streamed", "polarizations", "modes"]
@@ -178,12 +179,12 @@ class Stream:
         """h₊, h× of ``pnrotor.modes(evolution, ell_max, amplitude_order, distance, tidal_order,
         memory).polarizations(inclination, phi_ref)`` (the direction (ι, π/2 − φ_ref) of the inertial frame, LALSuite's convention; strain at
         ``distance`` in Mpc or an astropy length; angles in radians or astropy angles), :class:`Streamed`: a
-        :class:`~pnrotor.waveform.polarizations.Polarizations` of any of the run's samples.  Summed in the frame of
+        :class:`~pnrotor.results.Polarizations` of any of the run's samples.  Summed in the frame of
         the line of sight, where only the modes m = 2 count (:func:`_line_of_sight`)."""
         ell_max, order2, distance_Mpc = check_arguments(ell_max, amplitude_order, distance)
         if distance_Mpc is None:
             raise ValueError("distance is required: h+ and hx are strain at that distance (Mpc, or an astropy length)")
-        inclination, phi_ref = _angle(inclination, "inclination"), _angle(phi_ref, "phi_ref")
+        inclination, phi_ref = angle(inclination, "inclination"), angle(phi_ref, "phi_ref")
         tides, memory = tides_of(self.inputs, tidal_order), check_memory_flag(memory)
         args, weights = self._wave_arguments(ell_max, order2, _scale(None, distance_Mpc, self.settings.M_sec), tides,
                                              memory, (inclination, 0.5 * np.pi - phi_ref))
@@ -325,7 +326,7 @@ class Streamed:
     def compute(self):
         """All the samples in memory, once checked to fit (a ValueError naming the ways to fewer samples and the
         streaming write otherwise, before allocating)."""
-        need, free = self.bytes_per_sample * len(self), _sampling.available_memory()
+        need, free = self.bytes_per_sample * len(self), processes.available_memory()
         if not need < free:
             raise ValueError(f"{self.kind}: {len(self)} samples would need {need / 2 ** 30:.3g} GiB, more than the "
                              f"{free / 2 ** 30:.3g} GiB of memory available now; choose {self._smaller}, or write them "
@@ -366,7 +367,7 @@ def modes(m1, *args, **kwargs):
       integrator's dense output without forming its history."""
     if isinstance(m1, Evolution):
         return modes_of_run(m1, *args, **kwargs)
-    if not (_ini.real(m1) or hasattr(m1, "unit")):   # a mass: a number, or an astropy Quantity
+    if not (real(m1) or hasattr(m1, "unit")):   # a mass: a number, or an astropy Quantity
         raise TypeError(f"modes() takes an Evolution (what pnrotor.evolve returns, or pnrotor.hdf5.read reads) or a "
                         f"binary's m1, m2, chi1, chi2, f_ref with delta_t=..., got {type(m1).__name__}")
     return _binary_modes(m1, *args, **kwargs)
