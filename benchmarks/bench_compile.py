@@ -6,7 +6,7 @@ Each part runs in a fresh process with NUMBA_CACHE_DIR pointing at an empty fold
   truncation, every step), the DOP853 core included (the CLI compiles it in a second process; here it is
   compiled in this one, first).  Per compiled function: the seconds of its compile events (their sum, and its
   own share without the compiles nested in it), as numba reports them (``numba:compile`` events).
-* calling compiled kernels: two set-up kernels of every run (``pn.system._store_series``, ``pn.system.earlier_end``)
+* calling compiled kernels: two set-up kernels of every run (``pn.system._store_series``, ``pn.ends.earlier_end``)
   compiled alone, then a loop defined here that calls both (the shape of a population's set-up in one call),
   and the same loop with one array slice assignment added, each in a fresh process.  numba links every callee's
   module into the caller's and optimizes and emits machine code for the whole call tree again
@@ -72,21 +72,21 @@ _LINKING = _LISTENER + """
 import numpy as np
 from numba import njit
 from pnrotor.ode import EVENTS_SIG, by_address
-from pnrotor.pn import lalsuite_orders, system
-from pnrotor.pn.evolve import _OPTIONS, build_system
+from pnrotor.pn import ends, lalsuite_orders, layout, rhs, system
+from pnrotor.pn.evolve import OPTIONS, build_system
 from pnrotor.pn.settings import settings
 from pnrotor.pn.series import kmax_from_orders
 
-s = settings(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 20.0, **{**_OPTIONS, **lalsuite_orders("T4")})
+s = settings(30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 20.0, **{**OPTIONS, **lalsuite_orders("T4")})
 t = time.perf_counter()
-events = by_address(system.events_precessing, EVENTS_SIG)
-parts = system._spin_independent_parts((s.X1, s.approximant, tuple(kmax_from_orders(3.5, 3.0, 3.0).tolist()), 3.0,
+events = by_address(rhs.events_precessing, EVENTS_SIG)
+parts = system.cached_spin_independent_parts((s.X1, s.approximant, tuple(kmax_from_orders(3.5, 3.0, 3.0).tolist()), 3.0,
                                         3.0, 1.0, 1.0, 1.0, 1.0, s.rotor, True, "torque"))
 print(f"events function and spin-independent parts: {time.perf_counter() - t:.2f} s")
 head, N, D, Ep = parts
-p, basis, y0 = np.zeros(system.P_SIZE), np.ones(9), np.array([0.2] + [0.1] * 6 + [1.0, 0.0, 0.0, 0.0, 0.0])
+p, basis, y0 = np.zeros(layout.P_SIZE), np.ones(9), np.array([0.2] + [0.1] * 6 + [1.0, 0.0, 0.0, 0.0, 0.0])
 for name, call in (("_store_series alone", lambda: system._store_series(N, D, Ep, basis, False, p, 0.2)),
-                   ("earlier_end alone (events by address)", lambda: system.earlier_end(*events.addresses, y0, p))):
+                   ("earlier_end alone (events by address)", lambda: ends.earlier_end(*events.addresses, y0, p))):
     t = time.perf_counter()
     call()
     print(f"{name:56} {time.perf_counter() - t:6.2f} s")
@@ -101,7 +101,7 @@ def loop(N, D, Ep, bases, P, Y0, c_addr, jit_addr, checks, fold):
     for i in range(P.shape[0]):
         checks[i, 0], checks[i, 1], checks[i, 2], checks[i, 3] = system._store_series(N, D, Ep, bases[i], fold,
                                                                                          P[i], Y0[i, 0])
-        checks[i, 4] = system.earlier_end(c_addr, jit_addr, Y0[i], P[i])
+        checks[i, 4] = ends.earlier_end(c_addr, jit_addr, Y0[i], P[i])
         if SLICE:
             P[i, :4] = Y0[i, :4]   # an array slice assignment
 

@@ -14,7 +14,7 @@ modes() computes a run of ≥ 2,048 samples in parts on the machine's threads (:
 LAL uses one.  The column "1 thread" is pnrotor's ℓ ≤ 4 again with one thread (``numba.set_num_threads(1)``).
 
 Timings include the Python calls and freeing each call's own output, and pnrotor's set-ups of each binary (its
-caches of spin-independent parts and of mode terms, `pn.system._spin_independent_parts` and
+caches of spin-independent parts and of mode terms, `pn.system.cached_spin_independent_parts` and
 `waveform.amplitudes._real_terms`, are emptied before each call, as for a new binary: ~0.07–0.12 ms and
 ~0.07–0.10 ms); medians over interleaved rounds
 (LAL, ours, LAL, ours with one thread, LAL, ours-default and the evolution alone, case by case: each of the three
@@ -57,7 +57,7 @@ def main():
 
     from pnrotor import evolve, modes
     from pnrotor.pn import lalsuite_orders
-    from pnrotor.pn.system import _spin_independent_parts
+    from pnrotor.pn.system import cached_spin_independent_parts
     from pnrotor.waveform.amplitudes import _real_terms
     from pnrotor.waveform.layout import n_modes
 
@@ -90,7 +90,7 @@ def main():
                               lal_call, ("single", lambda: one_thread(ours, case, ell_max=4, amplitude_order=1.5)),
                               lal_call, ("full", lambda: ours(case)),
                               ("evolve", lambda: evolve(*case, sampling=DT, **orders))):
-                _spin_independent_parts.cache_clear()   # each call pays its set-ups, as for a new binary
+                cached_spin_independent_parts.cache_clear()   # each call pays its set-ups, as for a new binary
                 _real_terms.cache_clear()
                 t = time.perf_counter()
                 call()

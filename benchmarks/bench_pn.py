@@ -23,7 +23,7 @@ Timings are medians over interleaved rounds (LAL and pnrotor alternate case by c
 a shared machine.  Each timing includes freeing that call's own output and nothing else (freeing a
 previous 30 MB BNS result can cost ~7 ms of system time on this machine, which would otherwise land on
 whichever call happens to drop it).  pnrotor's cache of a binary's spin-independent set-up
-(``pn.system._spin_independent_parts``, ~50–100 µs of Python) is emptied before each pnrotor call, so every
+(``pn.system.cached_spin_independent_parts``, ~50–100 µs of Python) is emptied before each pnrotor call, so every
 call pays it as for a new binary, as LAL does.  Also reported: pnrotor with sampling='steps' (every accepted step, no dense output)
 and its integration-only wall time, its accepted steps, and the samples.  Numba compile time is
 measured separately, in fresh processes with an empty NUMBA_CACHE_DIR (cold) and again with that
@@ -67,7 +67,7 @@ def option_costs(rounds):
     (median ms without, its range, median ms with, its range, the median of the rounds' ratios with/without, their
     range)} (ranges (min, max) over the rounds)."""
     from pnrotor.pn import evolve, lalsuite_orders
-    from pnrotor.pn.system import _spin_independent_parts
+    from pnrotor.pn.system import cached_spin_independent_parts
     from pnrotor.waveform.modes import modes
 
     m1, m2, c1, c2, f, lambdas = TIDAL["BNS-tidal"]
@@ -100,7 +100,7 @@ def option_costs(rounds):
             for fn, out in zip((off, on), times[name]):
                 t = time.perf_counter()
                 for _ in range(repeats[name]):
-                    _spin_independent_parts.cache_clear()
+                    cached_spin_independent_parts.cache_clear()
                     fn()
                 out.append((time.perf_counter() - t) / repeats[name])
     span = lambda x: (min(x), max(x))  # noqa: E731
@@ -174,7 +174,7 @@ def main():
 
     from pnrotor.interop.lal import spintaylor_series
     from pnrotor.pn import evolve, lalsuite_orders
-    from pnrotor.pn.system import _spin_independent_parts
+    from pnrotor.pn.system import cached_spin_independent_parts
 
     def lal_call(case, approx):
         *binary, lambdas = case
@@ -205,14 +205,14 @@ def main():
                 t = time.perf_counter()
                 lal_call(ALL[name], approx)
                 r["lal"].append(time.perf_counter() - t)
-                _spin_independent_parts.cache_clear()   # each call pays its set-up, as for a new binary
+                cached_spin_independent_parts.cache_clear()   # each call pays its set-up, as for a new binary
                 t = time.perf_counter()
                 e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling=DT, lambda1=l1, lambda2=l2, **orders)
                 integ = e.stats["wall_time_integrate_s"]
                 del e
                 r["ours"].append(time.perf_counter() - t)
                 r["integrate"].append(integ)
-                _spin_independent_parts.cache_clear()
+                cached_spin_independent_parts.cache_clear()
                 t = time.perf_counter()
                 e = evolve(m1, m2, c1, c2, f, approximant=approx, sampling="steps", lambda1=l1, lambda2=l2, **orders)
                 del e

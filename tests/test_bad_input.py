@@ -15,7 +15,7 @@ import pnrotor.integrate
 from pnrotor.analytic import PrecessingNutatingBinary
 from pnrotor.cli import main
 from pnrotor.ode import bulirsch_stoer, dop853
-from pnrotor.pn.evolve import normalize_approximant
+from pnrotor.approximants import normalize_approximant
 
 NAN, INF = math.nan, math.inf
 GOOD = dict(m1=10.0, m2=10.0, chi1=(0.0, 0.0, 0.0), chi2=(0.0, 0.0, 0.0), f_ref=20.0)
@@ -84,13 +84,13 @@ def test_evolve_rejects(kw, name):
 
 @pytest.mark.parametrize("approximant", ["T1", "T4", "T5"])
 def test_f_ref_beyond_the_end_of_the_inspiral_is_refused_where_the_events_are_positive_again(approximant):
-    """The start check refuses an f_ref past the end of the inspiral (pnrotor.pn.system.inspiral_end: the first v
+    """The start check refuses an f_ref past the end of the inspiral (pnrotor.pn.ends.inspiral_end: the first v
     where an event fails), also beyond the band where the events are negative (the PN series turn positive again at
     higher v: a review found f_ref = 1000 Hz accepted for an aligned 30 + 10 binary whose inspiral ends at 455 Hz),
     with the same bound in the message; just below the end it runs, to that end."""
     from pnrotor.pn.initial import frequency_from_v, total_mass_seconds
     from pnrotor.pn.series import basis_values, kmax_from_orders
-    from pnrotor.pn.system import inspiral_end
+    from pnrotor.pn.ends import inspiral_end
 
     m1, m2, a1, a2 = 30.0, 10.0, 0.5, -0.3
     X1 = m1 / (m1 + m2)
@@ -116,7 +116,7 @@ def test_the_start_check_agrees_with_inspiral_end_and_its_bound_lies_below_f_ref
     grid, which can miss one: its docstring); and where the start check finds an end that inspiral_end's grid
     misses (a review found such a band, 4e-4 wide in v), the bound in the message is the start check's, below
     f_ref (it said 'below 1292.5 Hz' for f_ref = 570.7 Hz): inspiral_end made to miss here."""
-    from pnrotor.pn import system
+    from pnrotor.pn import ends
     from pnrotor.pn.initial import frequency_from_v, total_mass_seconds
     from pnrotor.pn.series import basis_values, kmax_from_orders
 
@@ -124,8 +124,8 @@ def test_the_start_check_agrees_with_inspiral_end_and_its_bound_lies_below_f_ref
         for m1, m2, a1, a2, kappa in ((30.0, 10.0, 0.99, -0.5, 1.0), (1.4, 1.3, -0.99, 0.99, 20.0),
                                       (20.0, 20.0, 0.3, 0.2, 1.0)):
             b = basis_values(a1, a2, a1 * a2, a1 * a1, a2 * a2)
-            v_end = system.inspiral_end(m1 / (m1 + m2), approximant, kmax_from_orders(3.5, 3.5, 3.0), b, kappa,
-                                        kappa)
+            v_end = ends.inspiral_end(m1 / (m1 + m2), approximant, kmax_from_orders(3.5, 3.5, 3.0), b, kappa,
+                                      kappa)
             for v0 in np.linspace(0.1, 0.95, 18):
                 f = frequency_from_v(v0, total_mass_seconds(m1, m2))
                 kw = dict(chi1=(0.0, 0.0, a1), chi2=(0.0, 0.0, a2), kappa1=kappa, kappa2=kappa, sampling="final")
@@ -134,7 +134,7 @@ def test_the_start_check_agrees_with_inspiral_end_and_its_bound_lies_below_f_ref
                 else:
                     with pytest.raises(ValueError, match="past the end"):
                         pnrotor.evolve(m1, m2, f_ref=f, approximant=approximant, **kw)
-    monkeypatch.setattr(system, "inspiral_end", lambda *args: 1.0)
+    monkeypatch.setattr(ends, "inspiral_end", lambda *args: 1.0)
     with pytest.raises(ValueError, match="it ended at a lower v") as refusal:
         pnrotor.evolve(30.0, 10.0, (0.0, 0.0, 0.5), (0.0, 0.0, -0.3), 1000.0)
     assert re.search(r"f_ref must be below 454\.6\d* Hz", str(refusal.value)), str(refusal.value)

@@ -16,9 +16,10 @@ import math
 import numpy as np
 import pytest
 
-from pnrotor.pn import energy, flux, precession, series, system
+from pnrotor.pn import energy, ends, flux, layout, precession, rhs, series, system
 from pnrotor.pn.series import (B_A1, B_A1A1, B_A1A2, B_A2, B_A2A2, B_ONE, B_S11, B_S12, B_S22, basis_values,
                                evaluate, kmax_from_orders)
+from pnrotor.pn.vdot import vdot_series
 
 RNG = np.random.default_rng(20240611)
 GAMMA = 0.57721566490153286061
@@ -82,7 +83,7 @@ def test_taylor_t4_nonspinning_coefficients(nu):
     """Our series ratio F̂/Ê′ vs the TaylorT4 ω̇ coefficients of arXiv:0907.0700, Eq. (3.6)."""
     X1 = 0.5 * (1 + math.sqrt(1 - 4 * nu))
     kmax = kmax_from_orders(3.5, -1, -1)
-    N, D, _ = system.vdot_series(X1, "T4", kmax)
+    N, D, _ = vdot_series(X1, "T4", kmax)
     assert np.all(D[1:] == 0) and D[0, 0, 0] == 1.0
     pi2 = math.pi ** 2
     ref = {
@@ -107,7 +108,7 @@ def test_taylor_t4_spin_coefficients(X1):
     closed forms per S₁ = X₁²χ₁ (as tabulated in LALSuite)."""
     X2 = 1 - X1
     nu = X1 * X2
-    N, _, _ = system.vdot_series(X1, "T4", kmax_from_orders(3.5, 3.0, 2.0))
+    N, _, _ = vdot_series(X1, "T4", kmax_from_orders(3.5, 3.0, 2.0))
     m = X1
     # spin-orbit: coefficient of ℓ̂·S₁
     assert N[3, B_A1, 0] / m ** 2 == pytest.approx(-19 / 6 - 25 / (4 * m), rel=1e-13)
@@ -201,9 +202,9 @@ def test_numba_rhs_matches_numpy_reference(approximant, rotor):
     v = 0.31
     y = np.concatenate(([v], c1, c2, R, [2.0]))
     dy = np.empty(12)
-    system.rhs_precessing(0.0, y, p, dy)
+    rhs.rhs_precessing(0.0, y, p, dy)
 
-    N, D, _ = system.vdot_series(X1, approximant, kmax, k1, k2)
+    N, D, _ = vdot_series(X1, approximant, kmax, k1, k2)
     b = basis_values(ell @ c1, ell @ c2, c1 @ c2, c1 @ c1, c2 @ c2)
     vdot = 32 * X1 * (1 - X1) / 5 * v ** 9 * evaluate(N, v, b) / evaluate(D, v, b)
     assert dy[0] == pytest.approx(vdot, rel=1e-13)
@@ -233,8 +234,8 @@ def test_aligned_rhs_matches_precessing_rhs_for_aligned_spins():
     ya = np.array([0.3, 1.0])
     yp = np.concatenate(([0.3], c1, c2, [1.0, 0, 0, 0], [1.0]))
     da, dp = np.empty(2), np.empty(12)
-    system.rhs_aligned(0.0, ya, pa, da)
-    system.rhs_precessing(0.0, yp, pp, dp)
+    rhs.rhs_aligned(0.0, ya, pa, da)
+    rhs.rhs_precessing(0.0, yp, pp, dp)
     assert da[0] == pytest.approx(dp[0], rel=1e-14)
     assert da[1] == dp[11]
     assert np.all(dp[1:11] == 0.0)
@@ -282,15 +283,15 @@ def test_instantaneous_precession_averages_to_averaged_model():
         R = np.array([w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s])
         y_ = np.concatenate(([v], c1, c2, R, [phi]))
         dy = np.empty(12)
-        system.rhs_precessing_instantaneous(0.0, y_, p_inst, dy)
+        rhs.rhs_precessing_instantaneous(0.0, y_, p_inst, dy)
         chidot += dy[1:7] / K
         om += _omega_from_rdot(R, dy[7:11]) / K
     ya = np.concatenate(([v], c1, c2, R0, [0.0]))
     da = np.empty(12)
-    system.rhs_precessing(0.0, ya, p_avg, da)
+    rhs.rhs_precessing(0.0, ya, p_avg, da)
     np.testing.assert_allclose(chidot, da[1:7], rtol=1e-12, atol=1e-16)
     ds = np.empty(12)
-    system.rhs_precessing(0.0, ya, p_so, ds)
+    rhs.rhs_precessing(0.0, ya, p_so, ds)
     om_so = _omega_from_rdot(R0, ds[7:11])
     np.testing.assert_allclose(om - v ** 3 * ell, om_so, rtol=1e-12, atol=1e-18)
 
@@ -344,7 +345,7 @@ def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
     system.start_rows (evolve.build_rows), evolve those of its one binary by make_parameters and earlier_end
     (evolve.build_system): each row must be bitwise the other's (p, y0, the spin invariants, the start checks),
     whatever the order of the rows taken from the spin-independent parts."""
-    from pnrotor.pn.evolve import _OPTIONS, build_rows, build_system, population_parts
+    from pnrotor.pn.evolve import OPTIONS, build_rows, build_system, population_parts
     from pnrotor.pn.settings import Options, population_settings, settings
     rng = np.random.default_rng(12)
     n = 40
@@ -353,7 +354,7 @@ def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
     ell = np.array([0.6, 0.0, 0.8])
     if spins == "aligned":
         c1, c2 = c1[:, 2:] * ell, c2[:, 2:] * ell
-    options = {**_OPTIONS, "sampling": "final", "kappa1": 4.0, "kappa2": 2.0, "ell_hat": ell, "n_hat": (0.0, 1.0, 0.0)}
+    options = {**OPTIONS, "sampling": "final", "kappa1": 4.0, "kappa2": 2.0, "ell_hat": ell, "n_hat": (0.0, 1.0, 0.0)}
     ss = [settings(m1[i], m2[i], c1[i], c2[i], 20.0, **{**options, "f_max": 200.0 + i}) for i in range(n)]
     assert {s.spin_content for s in ss} == {spins}
     order = rng.permutation(n)             # row i from row order[i] of the parts
@@ -373,10 +374,10 @@ def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
             np.testing.assert_array_equal(a, b)
         p, at_v0 = system.make_parameters(
             s.X1, s.approximant, one.kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=4.0,
-            kappa2=2.0, v_end=s.v_max, spin_tol=system.spin_tolerance(s.atol, s.rtol),
+            kappa2=2.0, v_end=s.v_max, spin_tol=layout.spin_tolerance(s.atol, s.rtol),
             phase_shift=s.precession_phase_shift, aligned_basis=bases[i] if spins == "aligned" else None,
             basis=bases[i], v_check=s.v0)
-        np.testing.assert_array_equal(checks[i], [*at_v0, system.earlier_end(*events.addresses, one.y0, p)])
+        np.testing.assert_array_equal(checks[i], [*at_v0, ends.earlier_end(*events.addresses, one.y0, p)])
 
 
 def test_a_population_member_past_the_end_of_its_inspiral_gets_evolves_message():

@@ -12,7 +12,7 @@ import pytest
 
 from pnrotor import batch, hdf5
 from pnrotor.cli import main
-from pnrotor.pn import evolve, evolve_many, system
+from pnrotor.pn import evolve, evolve_many, layout, rhs, system
 from pnrotor.pn.energy import energy_series
 from pnrotor.pn.flux import flux_series, horizon_rates
 from pnrotor.pn.series import basis_values, evaluate, kmax_from_orders, truncate
@@ -224,13 +224,13 @@ def test_the_orbit_gives_the_angular_momentum_the_horizons_take():
     R = np.array([math.cos(0.2), math.sin(0.2) * 0.6, math.sin(0.2) * 0.8, 0.0])
     y = np.array([v, *chi1, *chi2, *R, 0.3, X1, 1 - X1])
     dy = np.empty_like(y)
-    system.rhs_precessing(0.0, y, p, dy)
+    rhs.rhs_precessing(0.0, y, p, dy)
     w, x, yy, z = R
     ell = np.array([2 * (x * z + w * yy), 2 * (yy * z - w * x), w * w - x * x - yy * yy + z * z])
     q = dy[7:11]   # ω = 2 Ṙ R⁻¹ (vector part), dℓ̂/dt = ω × ℓ̂
     omega = 2 * np.array([-q[0] * x + q[1] * w - q[2] * z + q[3] * yy, -q[0] * yy + q[1] * z + q[2] * w - q[3] * x,
                           -q[0] * z - q[1] * yy + q[2] * x + q[3] * w])
-    L = X1 * (1 - X1) / v * (1 + v * v * (p[system.P_L2] + v * v * p[system.P_L4]))
+    L = X1 * (1 - X1) / v * (1 + v * v * (p[layout.P_L] + v * v * p[layout.P_L + 1]))
     sdot = sum(X * X * dy[i:i + 3] + 2 * X * dy[j] * c for X, i, j, c in ((X1, 1, 12, chi1), (1 - X1, 4, 13, chi2)))
     total = L * np.cross(omega, ell) + sdot
     torque = sum(horizon_rates(X, X1 * (1 - X1), v, c @ ell, c @ c)[2] * c / np.linalg.norm(c)

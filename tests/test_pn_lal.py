@@ -166,14 +166,14 @@ def test_spintaylor_t1_spins_differ_only_by_lal_flux_coefficient(case, monkeypat
         terms[6] = (c_ss, c_ll - kappa * (129 / 8 - 129 / 80))
         return terms
 
-    from pnrotor.pn.system import _spin_independent_parts
+    from pnrotor.pn.system import cached_spin_independent_parts
     monkeypatch.setattr(flux, "spin_spin_flux_per_body", lal_value)
-    _spin_independent_parts.cache_clear()   # the series of the patched flux, not the cached ones
+    cached_spin_independent_parts.cache_clear()   # the series of the patched flux, not the cached ones
     try:
         _check(compare(*CASES[case], "T1"), ("T1", case))
     finally:
         monkeypatch.undo()
-        _spin_independent_parts.cache_clear()
+        cached_spin_independent_parts.cache_clear()
 
 
 @pytest.mark.parametrize("case, measured", [("q3-precessing", 4.3e-8), ("q10-precessing", 1.3e-8)])

@@ -192,13 +192,13 @@ def test_termination_v_max_and_step_limit():
 
 def test_termination_spin_magnitude_event():
     """The |χ| > 1 event fires when |χ|² exceeds 1 + 1e-10 (fed here through the event function)."""
-    from pnrotor.pn import system
+    from pnrotor.pn import layout, rhs, system
     from pnrotor.pn.series import kmax_from_orders
     p = system.make_parameters(0.5, "T4", kmax_from_orders(3.5, 3, 3), so_order=3.0, ss_order=3.0)
-    g = np.empty(system.N_EVENTS)
+    g = np.empty(layout.N_EVENTS)
     y = np.concatenate(([0.3], [0, 0, 1 + 1e-9], [0, 0, 0.5], [1, 0, 0, 0], [0]))
-    system.events_precessing(0.0, y, p, g)
-    assert g[system.EV_SPIN1] < 0 < g[system.EV_SPIN2]
+    rhs.events_precessing(0.0, y, p, g)
+    assert g[layout.EV_SPIN1] < 0 < g[layout.EV_SPIN2]
 
 
 @pytest.mark.parametrize("approximant", ["T1", "T4", "T5"])
@@ -206,52 +206,53 @@ def test_vdot_peak_event_is_the_v_derivative_of_omega_dot(approximant):
     """Event 6 is v⁻¹⁰ D² ∂(v²v̇)/∂v/(32ν/5) at fixed spins and ℓ̂ (ω̇ = 3v²v̇/M, LAL's d²ω/dt² test):
     checked against a central difference of v²v̇ from the right-hand side, for a precessing state and for
     the aligned (folded) one."""
-    from pnrotor.pn import system
+    from pnrotor.pn import layout, rhs, system
+    from pnrotor.pn.vdot import vdot_series
     from pnrotor.pn.series import basis_values, eval_at, kmax_from_orders
     X1, v = 0.7, 0.35
     kmax = kmax_from_orders(3.5, 3.5, 3)
     c1, c2 = np.array([0.3, -0.4, 0.5]), np.array([0.0, 0.2, -0.6])
     y = np.concatenate(([v], c1, c2, [0.9, 0.1, -0.3, 0.2], [0.0]))
     y[7:11] /= np.linalg.norm(y[7:11])
-    ell = np.array(system._ell_hat(*y[7:11]))
+    ell = np.array(rhs._ell_hat(*y[7:11]))
     bvals = basis_values(ell @ c1, ell @ c2, c1 @ c2, c1 @ c1, c2 @ c2)
-    N, D, _ = system.vdot_series(X1, approximant, kmax)
+    N, D, _ = vdot_series(X1, approximant, kmax)
     for aligned in (False, True):
         p = system.make_parameters(X1, approximant, kmax, so_order=3.5, ss_order=3.0,
                                    aligned_basis=bvals if aligned else None)
-        rhs, events, state = ((system.rhs_aligned, system.events_aligned, np.array([v, 0.0])) if aligned
-                              else (system.rhs_precessing, system.events_precessing, y))
+        f, events, state = ((rhs.rhs_aligned, rhs.events_aligned, np.array([v, 0.0])) if aligned
+                            else (rhs.rhs_precessing, rhs.events_precessing, y))
 
         def vdot(x):
             s, d = state.copy(), np.empty(state.size)
             s[0] = x
-            rhs(0.0, s, p, d)
+            f(0.0, s, p, d)
             return x * x * d[0]
 
         h = 1e-5
         fd = (vdot(v + h) - vdot(v - h)) / (2 * h)
-        g = np.empty(system.N_EVENTS)
+        g = np.empty(layout.N_EVENTS)
         events(0.0, state, p, g)
-        expected = fd * eval_at(D, v, bvals) ** 2 / (v ** 10 * p[system.P_VDOT0])
-        assert g[system.EV_VDOT_PEAK] == pytest.approx(expected, rel=1e-7)
+        expected = fd * eval_at(D, v, bvals) ** 2 / (v ** 10 * p[layout.P_VDOT0])
+        assert g[layout.EV_VDOT_PEAK] == pytest.approx(expected, rel=1e-7)
 
 
 def test_right_hand_sides_and_events_cannot_raise():
     """Compiled with error_model='numpy', so evolve may pass them by address (an exception would be lost
     there): at v = 0 and with R = 0 they give inf/nan, which the integrator reports as 'nonfinite', where
     the default error model raises ZeroDivisionError."""
-    from pnrotor.pn import system
+    from pnrotor.pn import layout, rhs, system
     from pnrotor.pn.series import kmax_from_orders
     p = system.make_parameters(0.5, "T1", kmax_from_orders(3.5, 3, 3), so_order=3.0, ss_order=3.0)
-    cases = ((system.rhs_aligned, system.events_aligned, np.array([0.0, 0.0])),
-             (system.rhs_precessing, system.events_precessing, np.concatenate(([0.0], [0.1] * 6, [0.0] * 4, [0.0]))),
-             (system.rhs_precessing_instantaneous, None, np.concatenate(([0.3], [0.1] * 6, [0.0] * 4, [0.0]))))
-    for rhs, events, y in cases:
+    cases = ((rhs.rhs_aligned, rhs.events_aligned, np.array([0.0, 0.0])),
+             (rhs.rhs_precessing, rhs.events_precessing, np.concatenate(([0.0], [0.1] * 6, [0.0] * 4, [0.0]))),
+             (rhs.rhs_precessing_instantaneous, None, np.concatenate(([0.3], [0.1] * 6, [0.0] * 4, [0.0]))))
+    for f, events, y in cases:
         d = np.empty(y.size)
-        rhs(0.0, y, p, d)
+        f(0.0, y, p, d)
         assert not np.all(np.isfinite(d))
         if events is not None:
-            g = np.empty(system.N_EVENTS)
+            g = np.empty(layout.N_EVENTS)
             events(0.0, y, p, g)
             assert not np.all(np.isfinite(g))
 
@@ -317,11 +318,11 @@ def test_per_orbit_times_are_the_roots_of_the_interpolated_phase(forward):
     brentq's accuracy (~1e-15); a target at a step boundary gives that boundary, one rounded past the end the end itself."""
     from scipy.optimize import brentq
 
-    from pnrotor.pn.evolve import _OPTIONS, build_system, integrate_half
+    from pnrotor.pn.evolve import OPTIONS, build_system, integrate_half
     from pnrotor.pn.sampling import _phase_times
     from pnrotor.pn.settings import settings
 
-    s = settings(30.0, 10.0, (0.5, 0.1, 0.3), (0.0, 0.4, -0.2), 20.0, **{**_OPTIONS, "f_min": 10.0})
+    s = settings(30.0, 10.0, (0.5, 0.1, 0.3), (0.0, 0.4, -0.2), 20.0, **{**OPTIONS, "f_min": 10.0})
     res, _ = integrate_half(s, build_system(s), forward, None, True)
     d, i = res.dense, 11
     phi = lambda t: d(t)[i]   # noqa: E731
@@ -358,7 +359,7 @@ def test_a_half_without_a_step_samples_as_steps_does(sampling):
     half had steps."""
     import dataclasses
 
-    from pnrotor.pn.evolve import _OPTIONS, build_system, integrate_half
+    from pnrotor.pn.evolve import OPTIONS, build_system, integrate_half
     from pnrotor.pn.sampling import sample
     from pnrotor.pn.settings import settings
 
@@ -370,7 +371,7 @@ def test_a_half_without_a_step_samples_as_steps_does(sampling):
         for name in ("t", "v", "Phi", "chi1", "chi2", "R", "ell_hat"):
             np.testing.assert_array_equal(getattr(run, name), getattr(steps, name))
     s = settings(30.0, 10.0, (0.5, 0.1, 0.3), (0.0, 0.4, -0.2), 100.0,
-                 **{**_OPTIONS, "f_min": 70.0, "sampling": sampling})
+                 **{**OPTIONS, "f_min": 70.0, "sampling": sampling})
     system = build_system(s)
     backward, _ = integrate_half(s, system, False, None, True)
     forward, _ = integrate_half(s, system, True, None, True)
@@ -480,14 +481,14 @@ def test_output_kernel_matches_the_integrators_dense_output():
     """The sampling kernel's dense evaluation equals pnrotor.ode's DenseOutput at the same times."""
     from pnrotor.ode import dop853
     from pnrotor.pn import sampling as ev
-    from pnrotor.pn import system
+    from pnrotor.pn import rhs, system
     from pnrotor.pn.series import kmax_from_orders
     p = system.make_parameters(0.75, "T4", kmax_from_orders(3.5, 3, 3), so_order=3.0, ss_order=3.0)
     y0 = np.concatenate(([0.25], [0.5, 0.1, 0.3], [0.0, 0.4, -0.2], [1.0, 0.0, 0.0, 0.0], [0.0]))
-    r = dop853(system.rhs_precessing, 0.0, y0, 3000.0, 1e-12, args=p, dense=True)
+    r = dop853(rhs.rhs_precessing, 0.0, y0, 3000.0, 1e-12, args=p, dense=True)
     tq = np.linspace(0.0, 3000.0, 777)
-    hist = ev._allocate_history(tq.size)
-    ev._fill_history(ev.MODE_ORBITAL, r.dense.seg_t, r.dense.seg_h, r.dense.coef, tq, False, ev._NO_Y,
+    hist = ev.allocate_history(tq.size)
+    ev.fill_history(ev.MODE_ORBITAL, r.dense.seg_t, r.dense.seg_h, r.dense.coef, tq, False, ev.NO_Y,
                      np.array([1.0, 0, 0, 0]), Z, np.zeros(3), np.zeros(3), 0, *hist)
     Y = r.dense(tq)
     # equal up to the rounding of fused multiply-adds (the ODE kernel contracts, ours need not) and, for

@@ -23,7 +23,7 @@ from pnrotor.pn import evolve, evolve_many, lalsuite_orders
 from pnrotor.pn.energy import tidal_energy
 from pnrotor.pn.flux import tidal_flux
 from pnrotor.pn.series import kmax_from_orders
-from pnrotor.pn.system import vdot_series
+from pnrotor.pn.vdot import vdot_series
 
 DT = 1.0 / 4096
 LAMBDAS = (350.0, 820.0)

@@ -58,7 +58,7 @@ def test_start_between_pole_guard_and_pole(approximant, past):
 @pytest.mark.parametrize("f_ref", [300.0, 500.0, 1000.0])
 def test_f_ref_beyond_the_inspiral_is_a_value_error(approximant, chi, f_ref):
     """30 + 30 M☉: the inspiral ends near 50–185 Hz (measured), so these f_ref are all past it.  The error
-    gives the bound (pnrotor.pn.system.inspiral_end, a grid and bisection of the series in numpy); for
+    gives the bound (pnrotor.pn.ends.inspiral_end, a grid and bisection of the series in numpy); for
     nonspinning and aligned spins it is where the integrated run from 20 Hz ends (events located by DOP853),
     and just below it a run starts."""
     with pytest.raises(ValueError, match="f_ref") as info:
@@ -199,7 +199,7 @@ def test_f_ref_past_the_peak_of_vdot_is_a_value_error():
 def _omega_dot_of_v(v, X1, chi, approximant, orders):
     """v²v̇(v) ∝ ω̇ for spins χ ẑ on both bodies, from the numpy series evaluator (not the numba event code)."""
     from pnrotor.pn.series import basis_values, evaluate, kmax_from_orders
-    from pnrotor.pn.system import vdot_series
+    from pnrotor.pn.vdot import vdot_series
     N, D, _ = vdot_series(X1, approximant, kmax_from_orders(*orders))
     b = basis_values(chi, chi, chi * chi, chi * chi, chi * chi)
     return v ** 11 * evaluate(N, v, b) / evaluate(D, v, b)

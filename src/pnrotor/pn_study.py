@@ -164,13 +164,13 @@ def case_settings(case, atol=ATOL_REF):
 def rotor_from_states(Y, s):
     """(R (N, 4), Φ (N,)) from state rows Y as pnrotor's sampling builds them: aligned y = [v, Φ],
     R = R₀ exp(Φẑ/2); coprecessing y = [v, χ₁, χ₂, R_p, Φ], R = R_p exp(Φẑ/2), normalized."""
-    from pnrotor.pn import system as S
+    from pnrotor.pn import layout
     if s.use_aligned:
-        phi = Y[:, S.YA_PHI]
+        phi = Y[:, layout.YA_PHI]
         q = np.broadcast_to(s.R0, (phi.size, 4))
     else:
-        phi = Y[:, S.Y_PHI]
-        q = Y[:, S.Y_R:S.Y_R + 4]
+        phi = Y[:, layout.Y_PHI]
+        q = Y[:, layout.Y_R:layout.Y_R + 4]
     c, sn = np.cos(0.5 * phi), np.sin(0.5 * phi)
     w, x, y, z = q.T
     R = np.column_stack((w * c - z * sn, x * c + y * sn, y * c - x * sn, z * c + w * sn))
@@ -239,11 +239,11 @@ def compensated_reference(case, grid, steps, refine):
     """(R, Φ) at the times ``grid`` (pnrotor's own output times) from the compensated 8th-order formula on
     the mesh grid ∪ steps (pnrotor's accepted steps at atol 1e-15, up to the last grid time), every
     interval split into ``refine`` equal parts."""
-    from pnrotor.pn import system as S
+    from pnrotor.pn import rhs
     from pnrotor.pn.evolve import build_system
     s = case_settings(case)
     system = build_system(s)
-    rhs = S.rhs_aligned if s.use_aligned else S.rhs_precessing
+    rhs = rhs.rhs_aligned if s.use_aligned else rhs.rhs_precessing
     base = np.union1d(grid, steps[steps < grid[-1]])
     if refine > 1:
         h = np.diff(base)
@@ -264,11 +264,11 @@ def run_scipy(case, method, tol, n_samples):
     → (R, Φ, nfev)."""
     from scipy.integrate import solve_ivp
 
-    from pnrotor.pn import system as S
+    from pnrotor.pn import rhs
     from pnrotor.pn.evolve import build_system
     s = case_settings(case, tol)
     system = build_system(s)
-    rhs = S.rhs_aligned if s.use_aligned else S.rhs_precessing
+    rhs = rhs.rhs_aligned if s.use_aligned else rhs.rhs_precessing
     p = system.p
 
     def f_py(t, y):
@@ -291,9 +291,9 @@ def run_scipy(case, method, tol, n_samples):
 def timed(fn):
     """Wall time of fn() including freeing its result; returns (seconds, small summary of the result).  pnrotor's
     cache of a binary's spin-independent set-up is emptied first: every call pays it, as for a new binary."""
-    from pnrotor.pn.system import _spin_independent_parts
+    from pnrotor.pn.system import cached_spin_independent_parts
 
-    _spin_independent_parts.cache_clear()
+    cached_spin_independent_parts.cache_clear()
     t = time.perf_counter()
     out = fn()
     summary = out.stats["wall_time_integrate_s"] if hasattr(out, "stats") else None

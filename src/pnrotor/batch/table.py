@@ -64,7 +64,7 @@ def default_name(p):
     """Readable, deterministic, filesystem-safe name of a run from its parameters (`pnrotor.evolve`'s
     keywords): approximant, masses, spins and f_ref, then every option that differs from its default,
     e.g. ``T4_m30_m10_chi1-0.6,0,0.2_chi2-0,-0.4,0.1_f20`` or ``..._f20_fmin10_dt0.000244140625``."""
-    from pnrotor.pn.evolve import normalize_approximant
+    from pnrotor.approximants import normalize_approximant
 
     vector = ",".join
     parts = [normalize_approximant(p["approximant"]), f"m{_number(p['m1'])}", f"m{_number(p['m2'])}",

@@ -38,6 +38,7 @@ import sys
 import time
 from pathlib import Path
 
+from pnrotor import approximants
 from pnrotor.batch.table import COLUMNS, DEFAULTS, REQUIRED, default_name, parse_sampling, parse_vector
 from pnrotor.cli import UsageError
 
@@ -72,7 +73,8 @@ def add_parser(subparsers):
     binary.add_argument("--f-ref", type=float, metavar="HZ",
                         help="GW frequency (twice the orbital) at which the spins are given; t = 0 there")
     model = parser.add_argument_group("model and output (with --batch: defaults for empty cells)")
-    model.add_argument("--approximant", help="T1, T4 (default) or T5 (also TaylorT4, SpinTaylorT4, ...)")
+    model.add_argument("--approximant", help=f"{approximants.names()} (default {DEFAULTS['approximant']}; also "
+                       "TaylorT4, SpinTaylorT4, ...)")
     model.add_argument("--pn-order", type=float, metavar="ORDER",
                        help="PN order of the nonspinning terms, 0 ... 4.5 (default 3.5)")
     model.add_argument("--spin-orbit-order", type=float, metavar="ORDER",

@@ -22,6 +22,8 @@ import lal
 import lalsimulation
 import numpy as np
 
+from .. import approximants
+
 __all__ = ["spintaylor_series", "spintaylor_orbit", "sph_harm_time_series", "polarization_series"]
 
 
@@ -30,11 +32,11 @@ def spintaylor_series(m1, m2, chi1, chi2, f_start, approximant="T4", delta_t=1.0
     """LAL's 14 output ``REAL8TimeSeries`` (V, Phi, S1x..z, S2x..z, LNhatx..z, E1x..z), as LAL returns them.
 
     Masses in M☉, ``f_start`` in Hz (gravitational-wave frequency), ``delta_t`` in s, ``approximant`` one
-    of "T1", "T4", "T5", ``kappa`` the spin-induced quadrupole parameters κ₁, κ₂ (1 for black holes),
+    with a LALSuite counterpart (its ``lal_name`` in :mod:`pnrotor.approximants`: "T1", "T4", "T5"), ``kappa`` the spin-induced quadrupole parameters κ₁, κ₂ (1 for black holes),
     ``lambdas`` the dimensionless tidal deformabilities Λ₁, Λ₂ and ``tideO`` LAL's tidal order (−1 all, 10 the
     5PN terms only, 0 none).
     """
-    approx = lalsimulation.GetApproximantFromString("SpinTaylor" + approximant)
+    approx = lalsimulation.GetApproximantFromString(approximants.get(approximant).lal_name)
     return lalsimulation.SimInspiralSpinTaylorPNEvolveOrbit(
         delta_t, m1 * lal.MSUN_SI, m2 * lal.MSUN_SI, f_start, 0.0, *chi1, *chi2, *ell_hat, *e1,
         lambdas[0], lambdas[1], kappa[0], kappa[1], -1, tideO, 7, 0, approx)

@@ -99,9 +99,9 @@ def _evolve_options():
 
 def _lal_order(value, name, highest):
     """The PN order of a LAL order ``value`` (−1, or an integer 0 … ``highest``: twice the PN order), None for −1."""
-    from pnrotor.pn.initial import _real
+    from pnrotor.values import real
 
-    k = float(value) if _real(value) else math.nan
+    k = float(value) if real(value) else math.nan
     if not (k == -1 or k in range(highest + 1)):
         raise ValueError(f"{name} must be -1 (pnrotor's default) or an integer from 0 to {highest} (twice the PN "
                          f"order); got {value!r}")
@@ -112,7 +112,7 @@ def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, s
               dquad_mon1=None, dquad_mon2=None, lambda1=None, lambda2=None, **options):
     """:class:`Arguments` from the SpinTaylor keywords (module docstring); a ValueError naming the first bad one."""
     from pnrotor.pn.evolve import LAL_TIDAL_ORDERS
-    from pnrotor.pn.initial import _real
+    from pnrotor.values import real
     from pnrotor.pn.settings import MAX_SO_ORDER, MAX_SS_ORDER
     from pnrotor.waveform.modes import ELL_MAX
 
@@ -127,7 +127,7 @@ def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, s
     if approximant not in APPROXIMANTS:
         raise ValueError(f"approximant must be one of {', '.join(APPROXIMANTS)}; got {approximant!r}")
     for name, value in (("f_lower", f_lower), ("f_ref", f_ref)):
-        if not (_real(value) and math.isfinite(value)):
+        if not (real(value) and math.isfinite(value)):
             raise ValueError(f"{name} must be a finite frequency in Hz; got {value!r}")
     f_lower, f_ref = float(f_lower), float(f_ref)
     if f_ref == 0.0:
@@ -142,7 +142,7 @@ def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, s
         ell_max = min(ELL_MAX, 2 + int(2 * order))
     pn_order = _lal_order(phase_order, "phase_order", 9)
     spin = _lal_order(spin_order, "spin_order", 8)
-    tides = LAL_TIDAL_ORDERS.get(float(tidal_order) if _real(tidal_order) else None)
+    tides = LAL_TIDAL_ORDERS.get(float(tidal_order) if real(tidal_order) else None)
     if tides is None:
         raise ValueError(f"tidal_order must be -1 (all: 5PN and 6PN), 12 (6PN), 10 (5PN) or 0 (none), LAL's tideO; "
                          f"got {tidal_order!r}")
@@ -183,9 +183,9 @@ def spintaylor_polarizations(approximant, m1, m2, chi1, chi2, *, distance, incli
     """(epoch in s, h₊, h×) with the meaning of LAL's ChooseTDWaveform(SpinTaylor``approximant``) (module docstring):
     masses in M☉, χᵢ (3,), distance in Mpc, angles in rad, frequencies in Hz, ``keywords`` those of
     :func:`arguments` and pnrotor's options."""
-    from pnrotor.pn.initial import _real
+    from pnrotor.values import real
 
-    if not (_real(long_asc_nodes) and math.isfinite(long_asc_nodes)):
+    if not (real(long_asc_nodes) and math.isfinite(long_asc_nodes)):
         raise ValueError(f"long_asc_nodes must be a finite angle in radians; got {long_asc_nodes!r}")
     _check_masses(m1, m2)
     a = arguments(approximant, f_lower, f_ref, **keywords)

@@ -94,12 +94,12 @@ def default_hook(name):
 # --------------------------------------------------------------------------------------------------
 #
 # The cores take their functions as one int64 array of addresses, FUNCTIONS_LAYOUT, and turn each pair into
-# a first-class function inside (`_function_of`).  Declared as FunctionType arguments instead, every call
+# a first-class function inside (`function_of`).  Declared as FunctionType arguments instead, every call
 # of a core from Python unboxed each function through numba's Python helpers (a module import, two
 # unpickled signatures and two Python calls per function), many times the cost of the address array.
 
 
-def _function_of(sig):
+def function_of(sig):
     """A numba intrinsic ``(c_addr, jit_addr) -> FunctionType(sig)``: the first-class function whose cfunc
     wrapper is at ``c_addr`` and whose numba-ABI entry is at ``jit_addr`` (0 for none).  numba calls
     ``jit_addr`` when it is set (exceptions raised inside propagate to the caller), else ``c_addr``
@@ -120,16 +120,16 @@ def _function_of(sig):
     return function
 
 
-rhs_function = _function_of(RHS_SIG)
-after_step_function = _function_of(AFTER_STEP_SIG)
-events_function = _function_of(EVENTS_SIG)
+rhs_function = function_of(RHS_SIG)
+after_step_function = function_of(AFTER_STEP_SIG)
+events_function = function_of(EVENTS_SIG)
 FUNCTIONS_LAYOUT = ("rhs", "after_step", "events")
 """The cores' ``functions`` argument: for each of these in turn, its (cfunc wrapper, jit entry or 0) addresses."""
 
 
 class _FunctionAddress:
-    """A compiled numba function as the cores take it: its ``addresses`` (:func:`_function_of`, from
-    :func:`_addresses`) and the function itself, which keeps the compiled code alive during a call."""
+    """A compiled numba function as the cores take it: its ``addresses`` (:func:`function_of`, from
+    :func:`addresses`) and the function itself, which keeps the compiled code alive during a call."""
 
     def __init__(self, f, sig, addresses):
         self._function = f
@@ -137,7 +137,7 @@ class _FunctionAddress:
         self.addresses = addresses
 
 
-def _addresses(f, sig, raises):
+def addresses(f, sig, raises):
     """(cfunc wrapper address, jit entry address or 0) of f compiled for sig; ``raises``: keep the jit entry, so
     that an exception raised inside reaches the caller (without it the call goes through the cfunc wrapper)."""
     from numba.experimental.function_type import _get_jit_address, _get_wrapper_address
@@ -167,7 +167,7 @@ def by_address(f, sig):
             raise TypeError(f"by_address takes a numba signature (pnrotor.ode.RHS_SIG, AFTER_STEP_SIG or EVENTS_SIG), "
                             f"got {sig!r}")
         _check_dispatcher(f, sig, "by_address's function")
-        entry = _BY_ADDRESS[key] = (sig, _FunctionAddress(f, sig, _addresses(f, sig, raises=False)))
+        entry = _BY_ADDRESS[key] = (sig, _FunctionAddress(f, sig, addresses(f, sig, raises=False)))
     return entry[1]
 
 
@@ -419,7 +419,7 @@ def _jit_function(f, sig, name):
             known = None
         if known is None or f.overloads.get(tuple(sig.args)) is not known[0]:
             _check_dispatcher(f, sig, name)
-            known = (f.overloads[tuple(sig.args)], _addresses(f, sig, raises=True))
+            known = (f.overloads[tuple(sig.args)], addresses(f, sig, raises=True))
             try:
                 _CHECKED.setdefault(f, {})[name] = known
             except TypeError:  # pragma: no cover

@@ -8,7 +8,7 @@ holes).  We write
     E′(v) = −ν v Ê′(v),
 
 with the spin-invariant basis B of :mod:`pnrotor.pn.series`.  :func:`energy_series` returns Ê with
-every term we know (truncation by PN order is applied later, in :mod:`pnrotor.pn.system`).
+every term we know (truncation by PN order is applied later, in :mod:`pnrotor.pn.vdot`).
 
 Sources, term by term (every coefficient below carries its own citation):
 

@@ -6,10 +6,10 @@ binaries or waveform modes) can compose:
 1. :func:`pnrotor.pn.settings.settings`: inputs checked and in geometric units (:mod:`pnrotor.pn.initial`),
    t = 0 at the reference GW frequency f_ref, Φ(0) = 0, n̂(0) = ``n_hat``, ℓ̂(0) = ``ell_hat``
    → :class:`~pnrotor.pn.settings.Settings`;
-2. :func:`build_system`: the right-hand side — :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) for
-   nonspinning and aligned-spin binaries, :func:`~pnrotor.pn.system.rhs_precessing` (state
+2. :func:`build_system`: the right-hand side — :func:`~pnrotor.pn.rhs.rhs_aligned` (state [v, Φ]) for
+   nonspinning and aligned-spin binaries, :func:`~pnrotor.pn.rhs.rhs_precessing` (state
    [v, χ₁, χ₂, R, Φ]) otherwise or when ``integrate_rotor=True`` (or
-   :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with ``precession='instantaneous'``) — its
+   :func:`~pnrotor.pn.rhs.rhs_precessing_instantaneous` with ``precession='instantaneous'``) — its
    events, parameter vector and initial state, and the check that f_ref is inside the inspiral
    → :class:`System` (:func:`build_rows` for many binaries at once);
 3. :func:`integrate_half`: DOP853 backward to f_min (if given) and forward to f_max or to termination,
@@ -26,12 +26,12 @@ Termination reasons (``Evolution.termination`` for the forward half, ``stats['te
   or the pole guard fires first, so only a change of the spins could end a run here;
 * ``'vdot_peak'`` — ∂(v²v̇)/∂v ≤ 0 at the current spins: the orbital frequency's rate ω̇ = 3v²v̇/M
   stopped increasing (LALSuite's d²ω/dt² ≤ 0, its code 1026; the well-defined end where T4's flux ratio
-  approaches a root and v would creep towards it forever, :mod:`pnrotor.pn.system` event 6);
+  approaches a root and v would creep towards it forever, :mod:`pnrotor.pn.rhs` event 6);
 * ``'vdot_divergent'`` — the denominator of v̇ (T5: the re-expanded Ê′/F̂) fell to 1e-3, just before
   the pole where v̇ → ∞ (for T1 the denominator is Ê′ itself and this is reported as
   ``'energy_balance'``);
 * ``'spin_magnitude'`` — |χᵢ|² exceeded 1 by more than 1000 (atol + rtol), at least 1e-10 and at most 1e-3:
-  far more than the integration's drift (:func:`pnrotor.pn.system.spin_tolerance`);
+  far more than the integration's drift (:func:`pnrotor.pn.layout.spin_tolerance`);
 * ``'nonfinite'``, ``'max_steps'``, ``'step_underflow'`` — integrator failures;
 * ``'time_limit'`` — the generous time bound (4τ_N + 10⁴ M forward) was reached (should not happen);
 * ``'not_integrated'`` — backward half only, when no f_min was given.
@@ -51,11 +51,12 @@ from ..ode.common import OUT_FINAL, OUT_STEPS, controller, default_hook
 from ..ode.dop853 import run_core
 from ..ode.result import (STATUS_EVENT, STATUS_MAX_STEPS, STATUS_NONFINITE, STATUS_STEP_UNDERFLOW,
                           STATUS_SUCCESS)
+from .. import approximants
+from . import ends, layout, rhs, system
 from . import initial as _ini
-from . import system as _sys
 from .sampling import compile_output_kernel, sample
 from .series import basis_values, kmax_from_orders
-from .settings import normalize_approximant, settings
+from .settings import settings
 from pnrotor.results.runs import Evolution
 
 TERMINATION_MESSAGES = {
@@ -78,7 +79,7 @@ CONTROLLER = dict(safety=0.85, max_factor=4.0)
 """DOP853 step-size controller for the inspiral.  With Hairer's defaults (0.9, 6) the accelerating chirp
 makes every few steps a rejection (18–57 of 116–216 attempts in the LALSuite comparison cases); with
 (0.85, 4) there are none and the runs cost 10–35% fewer evaluations (benchmarks/bench_pn.py)."""
-_CONTROLLER = controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
+CONTROLLER_ARGS = controller(CONTROLLER["safety"], 1.0 / 3.0, CONTROLLER["max_factor"])
 """(safety, min_factor, max_factor) as :func:`pnrotor.ode.dop853` would check them (min_factor its default)."""
 
 
@@ -107,13 +108,13 @@ def build_system(s):
     kmax = kmax_of(s)
     rhs, events = _functions(s.use_aligned, s.precession)
     bvals, y0 = _start(s)
-    p, at_v0 = _sys.make_parameters(
+    p, at_v0 = system.make_parameters(
         s.X1, s.approximant, kmax, so_order=s.spin_orbit_order, ss_order=s.spin_spin_order, kappa1=s.kappa1,
-        kappa2=s.kappa2, lambda1=s.lambda1, lambda2=s.lambda2, v_end=s.v_max, spin_tol=_sys.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
+        kappa2=s.kappa2, lambda1=s.lambda1, lambda2=s.lambda2, v_end=s.v_max, spin_tol=layout.spin_tolerance(s.atol, s.rtol), rotor=s.rotor,
         phase_shift=s.precession_phase_shift,
         aligned_basis=bvals if s.use_aligned else None, omega_l=_omega_l(s), basis=bvals, v_check=s.v0,
         horizon=s.horizon_absorption)
-    _check_start(s, kmax, bvals, *at_v0, _sys.earlier_end(*events.addresses, y0, p))
+    check_start(s, kmax, bvals, *at_v0, ends.earlier_end(*events.addresses, y0, p))
     return System(rhs, events, p, y0, kmax, bvals)
 
 
@@ -123,17 +124,17 @@ def kmax_of(s):
 
 
 def _functions(use_aligned, precession):
-    """(right-hand side, events) of a run, by address: :func:`~pnrotor.pn.system.rhs_aligned` (state [v, Φ]) if
-    ``use_aligned`` (its Settings' flag: nonspinning and aligned spins), else :func:`~pnrotor.pn.system.rhs_precessing`
-    (state [v, χ₁, χ₂, R, Φ]; or :func:`~pnrotor.pn.system.rhs_precessing_instantaneous` with
+    """(right-hand side, events) of a run, by address: :func:`~pnrotor.pn.rhs.rhs_aligned` (state [v, Φ]) if
+    ``use_aligned`` (its Settings' flag: nonspinning and aligned spins), else :func:`~pnrotor.pn.rhs.rhs_precessing`
+    (state [v, χ₁, χ₂, R, Φ]; or :func:`~pnrotor.pn.rhs.rhs_precessing_instantaneous` with
     ``precession='instantaneous'``)."""
     if use_aligned:
-        rhs, events = _sys.rhs_aligned, _sys.events_aligned
+        f, events = rhs.rhs_aligned, rhs.events_aligned
     else:
-        rhs = _sys.rhs_precessing_instantaneous if precession == "instantaneous" else _sys.rhs_precessing
-        events = _sys.events_precessing
+        f = rhs.rhs_precessing_instantaneous if precession == "instantaneous" else rhs.rhs_precessing
+        events = rhs.events_precessing
     # they cannot raise (error_model='numpy'), so they may go to the integrator by address
-    return by_address(rhs, RHS_SIG), by_address(events, EVENTS_SIG)
+    return by_address(f, RHS_SIG), by_address(events, EVENTS_SIG)
 
 
 def _invariants(x1, y1, z1, x2, y2, z2, lx, ly, lz):
@@ -160,7 +161,7 @@ def build_rows(o, b, parts, rows):
     (:func:`pnrotor.pn.system.start_rows`: ``evolve_many``): b holds their rows of
     :class:`~pnrotor.pn.settings.Binaries`, binary i from row rows[i] of the spin-independent ``parts``
     (:func:`population_parts`) → (right-hand side, events, parameter vectors P (n, P_SIZE), initial states Y0
-    (n, size), spin invariants (n, 9), start checks (n, 5): ``_check_start(s, kmax, invariants, *checks)`` raises
+    (n, size), spin invariants (n, 9), start checks (n, 5): ``check_start(s, kmax, invariants, *checks)`` raises
     for binary i what build_system would).  Bitwise build_system's numbers (tests/test_pn_coefficients.py)."""
     aligned = bool(b.aligned[0])
     rhs, events = _functions(aligned, o.precession)
@@ -169,8 +170,8 @@ def build_rows(o, b, parts, rows):
     masses = [b.X1[:, None], 1.0 - b.X1[:, None]] if o.horizon_absorption else []
     Y0 = np.concatenate([b.v0[:, None], zeros] if aligned else [b.v0[:, None], b.chi1, b.chi2, b.R0, zeros, *masses],
                         axis=1)
-    P, checks = np.zeros((b.v0.size, _sys.P_SIZE)), np.empty((b.v0.size, 5))
-    _sys.start_rows(*parts, rows, bases, aligned, b.v_max, _sys.spin_tolerance(o.atol, o.rtol), *events.addresses,
+    P, checks = np.zeros((b.v0.size, layout.P_SIZE)), np.empty((b.v0.size, 5))
+    system.start_rows(*parts, rows, bases, aligned, b.v_max, layout.spin_tolerance(o.atol, o.rtol), *events.addresses,
                     Y0, P, checks)
     return rhs, events, P, Y0, bases, checks
 
@@ -182,17 +183,17 @@ def _omega_l(s):
 def population_parts(s, X1, kappa1, kappa2, lambda1=0.0, lambda2=0.0):
     """:func:`pnrotor.pn.system.spin_independent_parts` of binaries with the model options of settings ``s``
     and arrays X1, κ₁, κ₂, Λ₁, Λ₂ (row i is what :func:`build_rows` takes for binary i)."""
-    return _sys.spin_independent_parts(X1, kappa1, kappa2, s.approximant, kmax_of(s),
+    return system.spin_independent_parts(X1, kappa1, kappa2, s.approximant, kmax_of(s),
                                        s.spin_orbit_order, s.spin_spin_order, s.rotor, s.precession_phase_shift,
                                        _omega_l(s), lambda1, lambda2, s.horizon_absorption)
 
 
-def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
+def check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
     """A ValueError naming f_ref and its bound if N, D, Ê′ or event 6 at v₀ say the inspiral has ended, or if one
-    of them does at a lower v (``ended``, :func:`pnrotor.pn.system.earlier_end`)."""
-    why = _ended_at(n0, d0, e0, peak0)
+    of them does at a lower v (``ended``, :func:`pnrotor.pn.ends.earlier_end`)."""
+    why = ended_at(n0, d0, e0, peak0)
     if why or ended:   # the bound: the first end on inspiral_end's grid or on the start check's, whichever is lower
-        v_end = min(_sys.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2, s.lambda1, s.lambda2),
+        v_end = min(ends.inspiral_end(s.X1, s.approximant, kmax, bvals, s.kappa1, s.kappa2, s.lambda1, s.lambda2),
                     ended or 1.0)
         why = f"{why} at v = {s.v0:.4g}" if why else \
             f"it ended at a lower v (v = {v_end:.4g}) and v = {s.v0:.4g} is beyond"
@@ -201,11 +202,11 @@ def _check_start(s, kmax, bvals, n0, d0, e0, peak0, ended):
                          f"(v = {v_end:.6g})")
 
 
-def _ended_at(n0, d0, e0, peak0):
-    """Why the inspiral has ended at v₀ by N, D, Ê′ and event 6 there, or None (:func:`_check_start`)."""
+def ended_at(n0, d0, e0, peak0):
+    """Why the inspiral has ended at v₀ by N, D, Ê′ and event 6 there, or None (:func:`check_start`)."""
     return ("E'(v) >= 0, the PN energy balance is invalid" if not e0 > 0.0
             else "dv/dt <= 0" if not n0 * d0 > 0.0
-            else f"the denominator of dv/dt is {d0:.3g} <= {_sys.DEN_EPS:g}, next to its pole" if not d0 > _sys.DEN_EPS
+            else f"the denominator of dv/dt is {d0:.3g} <= {layout.DEN_EPS:g}, next to its pole" if not d0 > layout.DEN_EPS
             else "the orbital frequency no longer accelerates (d2(omega)/dt2 <= 0)" if not peak0 > 0.0 else None)
 
 
@@ -215,7 +216,7 @@ def _ended_at(n0, d0, e0, peak0):
 
 _FORWARD_EVENTS = np.array([1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0])
 _BACKWARD_EVENTS = np.array([-1.0, 0.0, 0.0, 0.0, 0.0, -1.0, -1.0])
-"""Directions of the terminal events (:mod:`pnrotor.pn.system`): v − v_end rising forward, falling
+"""Directions of the terminal events (:mod:`pnrotor.pn.rhs`): v − v_end rising forward, falling
 backward; the denominator of v̇ and event 6 falling; the others on any crossing."""
 
 
@@ -229,7 +230,7 @@ def half(v0, nu, v_min, p, forward):
     if forward:
         return p, 4.0 * tau0 + 1.0e4, _FORWARD_EVENTS
     p = p.copy()
-    p[..., _sys.P_VEND] = v_min
+    p[..., layout.P_VEND] = v_min
     return p, -(2.0 * (_newtonian_time(v_min, nu) - tau0) + 1.0e4), _BACKWARD_EVENTS
 
 
@@ -250,9 +251,9 @@ def integrate_half(s, system, forward, t_eval, dense):
     (:func:`pnrotor.ode.dop853.run_core`)."""
     p, t_end, directions = half(s.v0, s.nu, s.v_min, system.p, forward)
     res = run_core(system.rhs, default_hook("after_step"), system.events, 0.0, system.y0, t_end, p,
-                   *_tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
-                   _NO_T_EVAL, OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, _sys.N_EVENTS, directions,
-                   *_CONTROLLER)
+                   *tolerances(system.y0.size, float(s.atol), float(s.rtol)), 0.0, math.inf, s.max_steps,
+                   _NO_T_EVAL, OUT_FINAL if t_eval == "final" else OUT_STEPS, dense, layout.N_EVENTS, directions,
+                   *CONTROLLER_ARGS)
     return res, termination(res.status, res.event_index, end_name(forward, s.f_max is not None), s.approximant)
 
 
@@ -263,7 +264,7 @@ def end_name(forward, f_max_given):
 
 
 @functools.lru_cache(maxsize=8)
-def _tolerances(n, atol, rtol):
+def tolerances(n, atol, rtol):
     """(atol, rtol) per component as the core takes them; cached, as the core only reads them."""
     return np.full(n, atol), np.full(n, rtol)
 
@@ -272,12 +273,12 @@ def termination(status, idx, end, approximant):
     """The termination name (module docstring) of an integration's status and event index ``idx``; ``end``
     names the end-frequency event."""
     if status == STATUS_EVENT:
-        if idx == _sys.EV_V_END:
+        if idx == layout.EV_V_END:
             return end
-        if idx == _sys.EV_POLE:
-            return "energy_balance" if approximant == "T1" else "vdot_divergent"
-        return {_sys.EV_ENERGY: "energy_balance", _sys.EV_VDOT: "vdot_nonpositive",
-                _sys.EV_SPIN1: "spin_magnitude", _sys.EV_SPIN2: "spin_magnitude", _sys.EV_VDOT_PEAK: "vdot_peak"}[idx]
+        if idx == layout.EV_POLE:
+            return approximants.REGISTRY[approximant].pole
+        return {layout.EV_ENERGY: "energy_balance", layout.EV_VDOT: "vdot_nonpositive",
+                layout.EV_SPIN1: "spin_magnitude", layout.EV_SPIN2: "spin_magnitude", layout.EV_VDOT_PEAK: "vdot_peak"}[idx]
     return {STATUS_SUCCESS: "time_limit", STATUS_MAX_STEPS: "max_steps",
             STATUS_STEP_UNDERFLOW: "step_underflow", STATUS_NONFINITE: "nonfinite"}[status]
 
@@ -327,7 +328,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         (Δt > 0; at t = k Δt, t = 0 at f_ref, as LALSuite's grid from fStart), or n points per orbit
         (n ≥ 1 an integer; Φ = 2πj/n).  Uniform and per-orbit samples come from the dense output.
     rotor : {'coprecessing', 'orbital'}
-        Which rotor the precessing state holds (see :mod:`pnrotor.pn.system`): the co-precessing R_p
+        Which rotor the precessing state holds (see :mod:`pnrotor.pn.rhs`): the co-precessing R_p
         with R = R_p exp(Φẑ/2) (default, fast) or the full orbital-frame R.
     precession_phase_shift : bool, optional
         Apply Φ̇ = v³ − |Ω_ℓ,LO|²/(4v³) (arXiv:1507.00406).  Default: when spin_orbit_order ≥ 3.
@@ -340,7 +341,7 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
         Bohé et al. 2013's ϖ (Eqs. (4.3)–(4.4)); it differs from 'averaged' from NLO on.
         'instantaneous': Ω = v³ℓ̂ + ϖn̂ with Bohé et al.'s ϖ (spin-orbit) and n̂-dependent spin-spin
         precession, on the full orbital rotor (implies rotor='orbital', no phase shift; see
-        :mod:`pnrotor.pn.system`).
+        :mod:`pnrotor.pn.rhs`).
     max_steps : int
         Step limit per half.
     lambda1, lambda2 : float
@@ -400,7 +401,7 @@ def integrate(s):
     if s.horizon_absorption:   # the masses the horizons' absorption leaves at both ends of the run
         M = s.m1 + s.m2
         for key, res in (("final", res_f), ("initial", res_b)):
-            m = (s.X1, 1.0 - s.X1) if res is None else res.y[-1, _sys.Y_M1:_sys.Y_M2 + 1].tolist()
+            m = (s.X1, 1.0 - s.X1) if res is None else res.y[-1, layout.Y_M1:layout.Y_M2 + 1].tolist()
             stats[f"m1_{key}_Msun"], stats[f"m2_{key}_Msun"] = m[0] * M, m[1] * M
     return res_f, res_b, term_f, stats
 
@@ -430,10 +431,10 @@ def check_inputs(m1, m2, chi1, chi2, f_ref, **options):
     before it says it is compiling and starts compiling (a cold cache is no reason to wait for an input error).
     Two checks need more and stay in ``evolve``: whether f_ref is past the end of the inspiral (the compiled set-up)
     and whether a uniform or per-orbit sampling fits in memory (the integrated span)."""
-    settings(m1, m2, chi1, chi2, f_ref, **{**_OPTIONS, **options})
+    settings(m1, m2, chi1, chi2, f_ref, **{**OPTIONS, **options})
 
 
-_OPTIONS = {name: parameter.default for name, parameter in inspect.signature(evolve).parameters.items()
+OPTIONS = {name: parameter.default for name, parameter in inspect.signature(evolve).parameters.items()
             if parameter.kind is inspect.Parameter.KEYWORD_ONLY}
 """evolve's keyword arguments and their defaults."""
 
@@ -476,14 +477,17 @@ def lalsuite_orders(approximant, phaseO=7, spinO=-1, tideO=-1):
       (see :mod:`pnrotor.pn.flux`).
     * tides: tideO = −1 (LAL's default, ``LAL_SIM_INSPIRAL_TIDAL_ORDER_ALL``) or 12 → tidal_order 6; 10 (5PN
       only) → 5; 0 → 0.
+
+    The orders are the approximant's ``lal_orders`` in :mod:`pnrotor.approximants`.
     """
-    a = normalize_approximant(approximant)
+    a = approximants.get(approximant)
+    if a.lal_orders is None:
+        raise ValueError(f"approximant {a.name} has no LALSuite counterpart")
     if spinO != -1 or phaseO not in (7, -1):
         raise ValueError("only phaseO = 7 (or -1) with spinO = -1 is mapped")
     if tideO not in LAL_TIDAL_ORDERS:
         raise ValueError(f"tideO must be one of -1 (all), 12, 10 or 0, got {tideO!r}")
-    return {"pn_order": 3.5, "spin_orbit_order": 2.5 if a == "T1" else 3.0, "spin_spin_order": 3.0,
-            "precession_phase_shift": True, "tidal_order": LAL_TIDAL_ORDERS[tideO]}
+    return {**a.lal_orders, "tidal_order": LAL_TIDAL_ORDERS[tideO]}
 
 
 LAL_TIDAL_ORDERS = {-1: 6.0, 12: 6.0, 10: 5.0, 0: 0.0}

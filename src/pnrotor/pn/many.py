@@ -36,9 +36,7 @@ Newtonian time, :func:`~pnrotor.pn.evolve.half`); a single run that hit its own 
 """
 
 import gc
-import inspect
 import math
-import sys
 import time
 from contextlib import contextmanager
 
@@ -52,11 +50,12 @@ from ..ode.dop853 import core as dop853_core
 from ..ode.events import crossed, locate_root
 from ..ode.result import STATUS_EVENT, contd8
 from . import initial as _ini
-from .evolve import (_CONTROLLER, TERMINATION_MESSAGES, _check_start, _ended_at, _tolerances, build_rows, end_name,
+from .evolve import (CONTROLLER_ARGS, TERMINATION_MESSAGES, check_start, ended_at, tolerances, build_rows, end_name,
                      half, kmax_of, population_parts, termination, warn_if_unresolved)
-from .sampling import _fill_history, output_mode
+from .sampling import fill_history, output_mode
 from .settings import Binaries, binary_settings, options, population_settings, target_v
-from .system import EV_V_END, N_EVENTS, P_VEND
+from .inputs import from_frame, is_frame, per_binary, population_size, target_table
+from .layout import EV_V_END, N_EVENTS, P_VEND
 from pnrotor.results.populations import INSPIRAL_ENDS, STATE, Population, spin_angles
 
 __all__ = ["evolve_many", "Population", "spin_angles", "INSPIRAL_ENDS"]
@@ -105,7 +104,7 @@ def _integrate_all(lo, hi, functions, Y0, P, t_end, directions, atol, rtol, max_
                 ti, yi, status, event = _nearer_targets(events, P[k], near_v[k, j], directions[k, EV_V_END],
                                                         seg_t, seg_h, seg_c, iv, fv, t_out[last], final)
             t[i] = ti
-            _fill_history(mode, no_t, no_t, seg_c, no_t, False, yi, R0[k], ell0[k], c1[k], c2[k], i, v, Phi, chi1,
+            fill_history(mode, no_t, no_t, seg_c, no_t, False, yi, R0[k], ell0[k], c1[k], c2[k], i, v, Phi, chi1,
                           chi2, R, ell)
             counts[i, 0] = status
             counts[i, 1] = event
@@ -145,89 +144,6 @@ def _nearer_targets(events, p_run, v_target, direction, seg_t, seg_h, seg_c, iv,
     return t_final, final, iv[IV_STATUS], iv[IV_EVENT]
 
 
-def _per_binary(x, n, name, shape=(), unit=None):
-    """x as float64 of shape (n,) + shape, from that shape or ``shape`` or (1,) + shape (one value for every
-    binary), or a ValueError naming the parameter (booleans, text and complex numbers refused, as ``evolve``
-    refuses them; an astropy Quantity converted to ``unit``, and refused where the parameter has none)."""
-    want = "(N,) or a scalar" if not shape else f"(N, {shape[0]}) or ({shape[0]},)"
-    a = _numbers(x, name, f"{want} with N = {n} binaries", unit)
-    if a.shape not in (shape, (1,) + shape, (n,) + shape):
-        raise ValueError(f"{name} must have shape {want} with N = {n} binaries, got {a.shape}")
-    return np.ascontiguousarray(np.broadcast_to(a, (n,) + shape))
-
-
-def _numbers(x, name, shape, unit=None):
-    """x as a float64 array, or a ValueError naming it and the ``shape`` expected: booleans are refused, as
-    ``evolve`` refuses them, and so are text, complex numbers and ragged sequences; an astropy Quantity is
-    converted to ``unit`` (M_sun, Hz), or refused where there is none; so is a numpy masked array with masked
-    entries (numpy would compute its hidden values)."""
-    if np.ma.is_masked(x):
-        count = np.ma.count_masked(x)
-        raise ValueError(f"{name} has {count} masked entr{'ies' if count > 1 else 'y'} (a numpy masked array): "
-                         f"evolve_many would compute the values hidden under the mask; drop those binaries or fill "
-                         f"them (x.filled(...))")
-    x = _ini.in_unit(x, unit, name, "numbers" if unit is None else f"numbers (in {unit})")
-    try:
-        if _has_bool_or_text(x) or np.iscomplexobj(x):
-            raise TypeError
-        return np.asarray(x, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError):
-        raise ValueError(f"{name} must be numbers (real: not booleans, text or complex) of shape {shape}") from None
-
-
-def _population_size(scalars, rows, lists):
-    """N, the number of binaries: the length of every (N,) per-binary value in ``scalars``, (N, 3) one in ``rows``
-    and (N, K) one in ``lists`` (the frequencies), which must agree but where it is 1 (shared, as numpy
-    broadcasts); 1 if every value is shared.  A ValueError names the values that disagree."""
-    sizes = {}
-    for group, ndim in ((scalars, 1), (rows, 2), (lists, 2)):
-        for name, x in group.items():
-            shape = _shape(x)
-            if shape != "ragged" and len(shape) == ndim:
-                sizes[name] = shape[0]
-    if len(set(sizes.values()) - {1}) > 1:
-        raise ValueError("the per-binary inputs must all have the same length N (one per binary) or 1, got "
-                         + ", ".join(f"{name} {n}" for name, n in sizes.items()))
-    n = max(sizes.values(), default=1)
-    if 0 in sizes.values():
-        raise ValueError(f"{min(sizes, key=sizes.get)} has no binary: N must be at least 1")
-    return n
-
-
-def _has_bool_or_text(x):
-    """Whether x is a boolean or text, an array of them, or a list or tuple holding one at any depth (numpy would
-    take True as 1 and "30" as 30)."""
-    if isinstance(x, np.ndarray):
-        return x.dtype.kind in "bSU"
-    if isinstance(x, (list, tuple)):
-        return any(_has_bool_or_text(item) for item in x)
-    return isinstance(x, _ini._BOOLS + _ini._TEXT)
-
-
-def _shape(x):
-    """np.shape(x), or "ragged" for nested sequences of unequal lengths (or of what numpy cannot stack, such as
-    astropy Quantities with units)."""
-    try:
-        return np.shape(x)
-    except (ValueError, TypeError):
-        return "ragged"
-
-
-def _target_table(f_end, frequencies, n):
-    """(N, K) target frequencies (NaN: to the end of the inspiral) and whether the outputs keep the K axis."""
-    if frequencies is None:
-        return _per_binary(np.nan if f_end is None else f_end, n, "f_end", unit="Hz")[:, None], False
-    if f_end is not None:
-        raise ValueError("give f_end (one state per binary) or frequencies (a list of them), not both")
-    f = _numbers(frequencies, "frequencies", f"(K,) or (N, K) with N = {n} binaries", "Hz")
-    if f.ndim == 1:
-        f = np.broadcast_to(f, (n, f.size))
-    if f.ndim != 2 or f.shape[0] != n or f.shape[1] == 0:
-        raise ValueError(f"frequencies must have shape (K,) or (N, K) with K >= 1 and N = {n} binaries, "
-                         f"got {f.shape}")
-    return np.ascontiguousarray(f), True
-
-
 def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, directions, R0, ell, chi1, chi2, rows,
                      near_v, near_r, out, counts):
     """Halves k = 0 … n−1 of one right-hand side (initial states Y0[k], parameter vectors P[k], t_end[k], event
@@ -236,9 +152,9 @@ def _integrate_group(rhs, events, mode, atol, rtol, max_steps, Y0, P, t_end, dir
     compiled loops took.  The loop runs on :func:`pnrotor.threads.run`'s threads (a ``nogil`` kernel), each taking
     the next :data:`_HALVES` halves as it is free: numba's parallel loop (``prange``) ran no faster and took
     longer to compile cold, and an even split left one thread idle at the end."""
-    atol_a, rtol_a = _tolerances(Y0.shape[1], atol, rtol)
+    atol_a, rtol_a = tolerances(Y0.shape[1], atol, rtol)
     args = (function_addresses(rhs, default_hook("after_step"), events), Y0, P, t_end, directions,
-            atol_a, rtol_a, max_steps, *_CONTROLLER, mode, R0, ell, chi1, chi2, rows, near_v, near_r, out.t, out.v,
+            atol_a, rtol_a, max_steps, *CONTROLLER_ARGS, mode, R0, ell, chi1, chi2, rows, near_v, near_r, out.t, out.v,
             out.Phi, out.chi1, out.chi2, out.R, out.ell_hat, counts, np.empty(0), OUT_FINAL)
     start = time.perf_counter()
     if not _integrate_all.overloads:   # it is compiled with the DOP853 core inside: load the core that the CLI may
@@ -306,98 +222,6 @@ def _refused_targets(f, m1, m2, f_ref):
     return refused
 
 
-def _is_frame(x):
-    """Whether x is a pandas DataFrame (pandas is not imported for that)."""
-    pandas = sys.modules.get("pandas")
-    return pandas is not None and isinstance(x, pandas.DataFrame)
-
-
-_FRAME_SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order",
-                 "horizon_absorption")
-"""The columns of a batch table that a DataFrame may hold for the options evolve_many shares (one value each)."""
-
-
-def _from_frame(frame, given, f_end, frequencies, shared, lambdas):
-    """evolve_many's per-binary inputs from a DataFrame with a batch table's columns (evolve_many's docstring) →
-    (m1, m2, chi1, chi2, f_ref, f_end, backward: where the target is an f_min, or None, lambda1, lambda2: the
-    columns, or where absent the values ``lambdas`` gives); the options its columns hold go into ``shared``.  A
-    ValueError names the column (and row) that does not fit."""
-    from pandas.api.types import is_bool_dtype, is_numeric_dtype
-
-    from pnrotor.parameters import COLUMNS, REQUIRED
-
-    twice = [name for name, x in given.items() if x is not None]
-    if twice:
-        raise ValueError(f"{', '.join(twice)} must not be given with a DataFrame: its columns hold them")
-    unknown = [repr(c) for c in frame.columns if c not in COLUMNS]
-    missing = [c for c in REQUIRED if c not in frame.columns]
-    if unknown or missing or frame.columns.has_duplicates or not len(frame):
-        raise ValueError("the DataFrame of binaries must have the columns " + ", ".join(REQUIRED)
-                         + f" and may have {', '.join(c for c in COLUMNS if c not in REQUIRED)}, each once, and a row"
-                         + (f"; unknown: {', '.join(unknown)}" if unknown else "")
-                         + (f"; missing: {', '.join(missing)}" if missing else ""))
-
-    def numbers(name):
-        column = frame[name]
-        if not is_numeric_dtype(column) or is_bool_dtype(column):
-            raise ValueError(f"column {name} of the DataFrame must be numbers (not booleans or text), got dtype "
-                             f"{column.dtype}")
-        return column.to_numpy(dtype=np.float64, na_value=np.nan)
-
-    def vectors(name):
-        rows = []
-        for label, cell in frame[name].items():
-            try:
-                x = [float(item) for item in cell.split(",")] if isinstance(cell, str) else cell
-                x = np.asarray(x, dtype=np.float64)
-                if x.shape != (3,):
-                    raise ValueError
-            except (TypeError, ValueError):
-                raise ValueError(f"column {name} of the DataFrame must hold three numbers per row (a sequence or "
-                                 f"\"x,y,z\" text); row {label!r} holds {cell!r}") from None
-            rows.append(x)
-        return np.array(rows)
-
-    f_min, f_max = (numbers(name) if name in frame.columns else np.full(len(frame), np.nan) for name in ("f_min", "f_max"))
-    has_min, has_max = ~np.isnan(f_min), ~np.isnan(f_max)
-    backward = None
-    if has_min.any() or has_max.any():
-        if f_end is not None or frequencies is not None:
-            raise ValueError("the DataFrame's f_min or f_max column gives each binary its target: f_end and "
-                             "frequencies must not be given too")
-        both = frame.index[has_min & has_max]
-        if len(both):
-            raise ValueError(f"rows {', '.join(map(repr, both[:5]))}{' ...' * (len(both) > 5)} of the DataFrame have "
-                             "both f_min and f_max: evolve_many gives one state per row, at f_max (forward), at f_min "
-                             "(backward) or at the end of the inspiral")
-        f_end, backward = np.where(has_max, f_max, f_min), has_min
-    defaults = inspect.signature(evolve_many).parameters
-    for name in _FRAME_SHARED + ("sampling",):
-        values = frame[name].dropna().unique() if name in frame.columns else ()
-        if len(values) > 1:
-            raise ValueError(f"column {name} of the DataFrame holds several values ({', '.join(map(str, values[:5]))}"
-                             f"{' ...' * (len(values) > 5)}); evolve_many shares it among all binaries: call it once "
-                             "per value, or run the table with pnrotor.batch.population.run, which groups the rows")
-        if len(values) == 1:
-            value = values[0].item() if isinstance(values[0], np.generic) else values[0]
-            if name == "sampling":
-                if value != "final":
-                    raise ValueError(f"column sampling of the DataFrame must be final or empty (evolve_many gives "
-                                     f"states, not histories), got {value!r}")
-            elif shared[name] != defaults[name].default and shared[name] != value:
-                raise ValueError(f"{name} is given twice, as {shared[name]!r} and as the DataFrame's column, "
-                                 f"{value!r}")
-            else:
-                shared[name] = value
-    for name, value in lambdas.items():
-        if name in frame.columns:
-            if not (np.ndim(value) == 0 and value == defaults[name].default):
-                raise ValueError(f"{name} is given twice, as an argument and as the DataFrame's column")
-            lambdas[name] = numbers(name)
-    return (numbers("m1"), numbers("m2"), vectors("chi1"), vectors("chi2"), numbers("f_ref"), f_end, backward,
-            lambdas["lambda1"], lambdas["lambda2"])
-
-
 def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, frequencies=None, ell_hat=(0.0, 0.0, 1.0),
                 n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, approximant="T4", pn_order=3.5,
                 spin_orbit_order=None, spin_spin_order=None, atol=1e-12, rtol=0.0, rotor="coprecessing",
@@ -438,14 +262,12 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
         Spin-induced quadrupole constants.
     lambda1, lambda2 : array_like (N,) or scalar
         Dimensionless tidal deformabilities Λᵢ (0 for black holes).
-    approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
-        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
-    rotor, precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
-        The same (with ``horizon_absorption`` every binary is on the precessing state, its spins at the state's
-        frequency changed by what the horizons absorbed; the masses it leaves are not kept).
+    approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, rotor, precession_phase_shift, \
+integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
+        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries (with ``horizon_absorption`` every binary
+        is on the precessing state, its spins at the state's frequency changed by what the horizons absorbed; the
+        masses it leaves are not kept).
 
-    Notes
-    -----
     The number of threads is :func:`pnrotor.threads.thread_count`'s (numba's: ``numba.set_num_threads``,
     ``NUMBA_NUM_THREADS``; at most :func:`pnrotor.threads.limit`'s).  Invalid shared
     options or array shapes raise a ValueError; an invalid binary does not (module docstring).
@@ -457,24 +279,24 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
                   precession=precession, max_steps=max_steps, tidal_order=tidal_order,
                   horizon_absorption=horizon_absorption)
     backward = None   # a binary's target behind f_ref (f_min): by default where it lies below f_ref
-    if _is_frame(m1):
-        m1, m2, chi1, chi2, f_ref, f_end, backward, lambda1, lambda2 = _from_frame(
+    if is_frame(m1):
+        m1, m2, chi1, chi2, f_ref, f_end, backward, lambda1, lambda2 = from_frame(
             m1, dict(m2=m2, chi1=chi1, chi2=chi2, f_ref=f_ref), f_end, frequencies, shared,
             dict(lambda1=lambda1, lambda2=lambda2))
     else:
         missing = [name for name, x in (("m2", m2), ("chi1", chi1), ("chi2", chi2), ("f_ref", f_ref)) if x is None]
         if missing:
             raise TypeError(f"evolve_many() missing {', '.join(missing)} (or give m1 as a pandas DataFrame)")
-    n = _population_size(dict(m1=m1, m2=m2, f_ref=f_ref, kappa1=kappa1, kappa2=kappa2, lambda1=lambda1,
+    n = population_size(dict(m1=m1, m2=m2, f_ref=f_ref, kappa1=kappa1, kappa2=kappa2, lambda1=lambda1,
                               lambda2=lambda2, f_end=f_end),
                          dict(chi1=chi1, chi2=chi2, ell_hat=ell_hat, n_hat=n_hat), dict(frequencies=frequencies))
-    m1a, m2a, fref = (_per_binary(x, n, name, unit=unit) for x, name, unit in
+    m1a, m2a, fref = (per_binary(x, n, name, unit=unit) for x, name, unit in
                       ((m1, "m1", "M_sun"), (m2, "m2", "M_sun"), (f_ref, "f_ref", "Hz")))
-    targets, listed = _target_table(f_end, frequencies, n)
+    targets, listed = target_table(f_end, frequencies, n)
     K = targets.shape[1]
-    k1, k2 = _per_binary(kappa1, n, "kappa1"), _per_binary(kappa2, n, "kappa2")
-    l1, l2 = _per_binary(lambda1, n, "lambda1"), _per_binary(lambda2, n, "lambda2")
-    c1, c2, ell, nh = (_per_binary(x, n, name, (3,)) for x, name in
+    k1, k2 = per_binary(kappa1, n, "kappa1"), per_binary(kappa2, n, "kappa2")
+    l1, l2 = per_binary(lambda1, n, "lambda1"), per_binary(lambda2, n, "lambda2")
+    c1, c2, ell, nh = (per_binary(x, n, name, (3,)) for x, name in
                        ((chi1, "chi1"), (chi2, "chi2"), (ell_hat, "ell_hat"), (n_hat, "n_hat")))
     # the shared options fail for every binary alike: check them once (a binary of the table could itself be
     # invalid, which must not raise); a reference binary carries them to population_parts
@@ -561,10 +383,10 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
                 unresolved = unresolved or warn_if_unresolved(opts.atol, opts.rtol, Y0)   # once per call
                 keep = np.ones(g.size, dtype=bool)
                 for q, c in enumerate(checks.tolist()):
-                    if _ended_at(*c[:4]) or c[4]:
+                    if ended_at(*c[:4]) or c[4]:
                         j = g[q].item()
                         try:
-                            _check_start(settings_of(start + j, f_lo[j].item(), f_hi[j].item()), kmax, bases[q], *c)
+                            check_start(settings_of(start + j, f_lo[j].item(), f_hi[j].item()), kmax, bases[q], *c)
                         except ValueError as e:
                             refuse(start + j, e)
                             keep[q] = False

@@ -37,7 +37,7 @@ order this is exactly ⟨ϖ n̂⟩ with ϖ from Bohé+ 2013 Eq. (4.4):
 ⟨ϖ n̂⟩ = ½ v⁶ (7 S⊥ + 3δ Σ⊥) = v⁶ Σᵢ (2 + 3Xⱼ/(2Xᵢ)) Sᵢ⊥ (checked in the tests).  |L| is kept
 to the same relative order as the spin-orbit precession: L₂ with NLO, L₄ with NNLO.
 
-The frame rotor then obeys dR/dt = ½ (Φ̇ ℓ̂ + Ω_ℓ) R (see :mod:`pnrotor.pn.system`).
+The frame rotor then obeys dR/dt = ½ (Φ̇ ℓ̂ + Ω_ℓ) R (see :mod:`pnrotor.pn.rhs`).
 
 Why the torque form is the default: it is the model LALSuite integrates (the acceptance reference) and
 it keeps J = L + S₁ + S₂ fixed except for radiation reaction along ℓ̂ (tested).  Beyond leading order
@@ -148,7 +148,7 @@ def varpi_coefficients(X_i, X_j):
 
 
 def angular_momentum_coefficients(nu):
-    """(L₂, L₄) of |L| = (ν/v)(1 + L₂v² + L₄v⁴).   Blanchet 2014, Eq. (234); Bohé+ 2013, Eq. (4.7)."""
+    """(L₂, L₄) of |L| = (ν/v)(1 + L₂v² + L₄v⁴) = (ν/v)(1 + v²(L₂ + L₄v²)).   Blanchet 2014, Eq. (234); Bohé+ 2013, Eq. (4.7)."""
     return 1.5 + nu / 6.0, 27.0 / 8.0 - 19.0 / 8.0 * nu + (nu * nu) / 24.0
 
 
@@ -160,20 +160,39 @@ def phase_shift_weights(X1, X2):
     return X1 * X1 * (0.5 + 1.5 / X1), X2 * X2 * (0.5 + 1.5 / X2)
 
 
-def precession_terms(so_order, ss_order):
-    """Which precession terms a truncation includes: dict of booleans.
+# --------------------------------------------------------------------------------------------------
+# the precession coefficients as truncated series (what the parameter vector holds, pnrotor.pn.system)
+# --------------------------------------------------------------------------------------------------
 
-    Spin-orbit precession LO/NLO/NNLO enter with the 1.5/2.5/3.5PN spin-orbit terms of the phasing
-    (LALSuite: spin order 3/5/7); 2PN/3PN spin-spin precession with the 2PN/3PN spin² terms.
-    """
+SPIN_ORBIT_ORDERS = (1.5, 2.5, 3.5)
+"""The PN orders of the phasing's spin-orbit terms (LALSuite: spin order 3/5/7) with which the terms of the series in
+v² of the spin-orbit precession enter: σ₀, σ₂, σ₄ (:func:`spin_orbit_precession`), ϖ's w₀, w₂, w₄
+(:func:`varpi_coefficients`), and of |L| = (ν/v)(1 + v²(L₂ + L₄v²)) the L₂, L₄ (:func:`angular_momentum_coefficients`)
+with the second and third.  A new term: one more order here and one more coefficient in each of these functions."""
+
+SPIN_SPIN = ((2.0, spin_spin_precession_2pn), (3.0, spin_spin_precession_3pn))
+"""The orbit-averaged spin-spin precession as a truncated series, Ωᵢ ∋ Σₖ v⁶⁺²ᵏ [c_j χⱼ + c_j⊥ χⱼ⊥ + c_i⊥ χᵢ⊥]: for
+each power of v, the PN order of the spin² terms of the phasing with which it enters and its coefficient function
+(Xᵢ, Xⱼ, κᵢ) → (c_j, c_j⊥, c_i⊥).  A new term: one more entry."""
+
+
+def truncated(coefficients, orders, order):
+    """The coefficients of a series, those of the terms that enter at a PN order above ``order`` zeroed."""
+    return [c if entry <= order else 0.0 for c, entry in zip(coefficients, orders)]
+
+
+def precession_terms(so_order, ss_order):
+    """Which precession terms a truncation includes: dict of booleans (the numpy reference below and the instantaneous
+    model's spin-spin terms): spin-orbit LO/NLO/NNLO and 2PN/3PN spin-spin, by :data:`SPIN_ORBIT_ORDERS` and
+    :data:`SPIN_SPIN`."""
     so = -1.0 if so_order is None else so_order
     ss = -1.0 if ss_order is None else ss_order
-    return {"so_lo": so >= 1.5, "so_nlo": so >= 2.5, "so_nnlo": so >= 3.5,
-            "ss_2pn": ss >= 2.0, "ss_3pn": ss >= 3.0}
+    (lo, nlo, nnlo), ((ss2, _), (ss3, _)) = SPIN_ORBIT_ORDERS, SPIN_SPIN
+    return {"so_lo": so >= lo, "so_nlo": so >= nlo, "so_nnlo": so >= nnlo, "ss_2pn": ss >= ss2, "ss_3pn": ss >= ss3}
 
 
 # --------------------------------------------------------------------------------------------------
-# numpy reference (tests; the right-hand side in system.py evaluates the same formulas in numba)
+# numpy reference (tests; the right-hand sides in rhs.py evaluate the same formulas in numba)
 # --------------------------------------------------------------------------------------------------
 
 def _perp(a, ell):

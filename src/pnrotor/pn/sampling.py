@@ -25,21 +25,21 @@ from numba import njit
 
 from pnrotor import processes
 
-from . import system as _sys
+from . import layout
 
 MODE_ALIGNED, MODE_COPRECESSING, MODE_ORBITAL = 0, 1, 2
 """How a state row becomes a history row: see :func:`_store_block`."""
 
 
 def output_mode(use_aligned, rotor):
-    """The :func:`_fill_history` mode of a run's state: its Settings' ``use_aligned`` and ``rotor``."""
+    """The :func:`fill_history` mode of a run's state: its Settings' ``use_aligned`` and ``rotor``."""
     if use_aligned:
         return MODE_ALIGNED
     return MODE_ORBITAL if rotor == "orbital" else MODE_COPRECESSING
 
 
 _BLOCK = 64
-"""Samples per block of :func:`_fill_history`: its buffers stay in L1."""
+"""Samples per block of :func:`fill_history`: its buffers stay in L1."""
 
 
 @njit(cache=True, inline="always")
@@ -145,11 +145,11 @@ def _store_block(mode, y, cs, m, i0, R0, ell0, c1, c2, v, Phi, chi1, chi2, R, el
     the rows has no call and is vectorized.  Per mode:
 
     * aligned: y = [v, Φ], R = R₀ exp(Φẑ/2), spins and ℓ̂ constant (written only into χ₁, χ₂, ℓ̂ arrays with
-      rows: :func:`_allocate_history` gives an aligned run none);
+      rows: :func:`allocate_history` gives an aligned run none);
     * coprecessing: y = [v, χ₁, χ₂, R_p, Φ], R = R_p exp(Φẑ/2);
     * orbital: y = [v, χ₁, χ₂, R, Φ];
 
-    and for these two, χ₁, χ₂ and ℓ̂ arrays without rows get none (:func:`_fill_history` then leaves the spins' rows of
+    and for these two, χ₁, χ₂ and ℓ̂ arrays without rows get none (:func:`fill_history` then leaves the spins' rows of
     y unset).
 
     exp(Φẑ/2) = (cos Φ/2, 0, 0, sin Φ/2) and q·(c, 0, 0, s) = (wc − zs, xc + ys, yc − xs, zc + ws).
@@ -190,7 +190,7 @@ def _store_block(mode, y, cs, m, i0, R0, ell0, c1, c2, v, Phi, chi1, chi2, R, el
 
 
 @njit(cache=True)
-def _fill_history(mode, seg_t, seg_h, coef, tq, reverse, Y, R0, ell0, c1, c2, offset, v, Phi, chi1, chi2, R,
+def fill_history(mode, seg_t, seg_h, coef, tq, reverse, Y, R0, ell0, c1, c2, offset, v, Phi, chi1, chi2, R,
                   ell):
     """History rows offset, offset+1, … from states (per mode as :func:`_store_block`).
 
@@ -250,7 +250,7 @@ def _fill_history(mode, seg_t, seg_h, coef, tq, reverse, Y, R0, ell0, c1, c2, of
 
 
 _NO_T = np.empty(0)
-_NO_Y = np.empty((0, 1))
+NO_Y = np.empty((0, 1))
 _NO_SEG = np.empty(1)
 _NO_COEF = np.empty((1, 8, 1))
 
@@ -275,14 +275,14 @@ def _check_memory(n, s):
                          f"shorter span (f_min, f_max){stream}")
 
 
-def _allocate_history(n, mode=MODE_COPRECESSING):
+def allocate_history(n, mode=MODE_COPRECESSING):
     """(v, Φ, χ₁, χ₂, R, ℓ̂) arrays for n samples; for an aligned run (``mode``) χ₁, χ₂ and ℓ̂, constant, get no
-    rows here (:func:`_constant_rows`)."""
+    rows here (:func:`constant_rows`)."""
     rows = 0 if mode == MODE_ALIGNED else n
     return np.empty(n), np.empty(n), np.empty((rows, 3)), np.empty((rows, 3)), np.empty((n, 4)), np.empty((rows, 3))
 
 
-def _constant_rows(hist, mode, fixed, n):
+def constant_rows(hist, mode, fixed, n):
     """The history with an aligned run's χ₁, χ₂ and ℓ̂ as read-only (n, 3) views of their one value: no memory per
     sample."""
     if mode != MODE_ALIGNED:
@@ -300,19 +300,19 @@ def _repeated(x, n):
     return view
 
 
-def _fixed(s):
-    """The arguments of :func:`_fill_history` that a run fixes: R₀, ℓ̂ and the spins at f_ref."""
+def fixed_parts(s):
+    """The arguments of :func:`fill_history` that a run fixes: R₀, ℓ̂ and the spins at f_ref."""
     return np.ascontiguousarray(s.R0, dtype=np.float64), s.ell_hat, s.chi1, s.chi2
 
 
 def compile_output_kernel(s):
-    """Compile :func:`_fill_history` (or load it from numba's cache) now, once per process, for the argument
+    """Compile :func:`fill_history` (or load it from numba's cache) now, once per process, for the argument
     types :func:`sample` gives it.  :func:`pnrotor.pn.evolve.evolve` calls this before it integrates, so that on
     a cold cache it is compiled while another process compiles the DOP853 core (:mod:`pnrotor.numba_cache`),
     not after it; and so is :func:`_phase_roots` for a per-orbit run."""
-    if not _fill_history.overloads:
-        _fill_history(output_mode(s.use_aligned, s.rotor), _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, _NO_Y,
-                      *_fixed(s), 0, *_allocate_history(0))
+    if not fill_history.overloads:
+        fill_history(output_mode(s.use_aligned, s.rotor), _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, NO_Y,
+                      *fixed_parts(s), 0, *allocate_history(0))
     if s.sampling == "per_orbit" and not _phase_roots.overloads:
         _phase_roots(_NO_SEG, _NO_SEG, _NO_COEF, 0, _NO_T, 0.0, _NO_T)
 
@@ -321,34 +321,34 @@ def sample(s, res_f, res_b):
     """(t in M, (v, Φ, χ₁, χ₂, R, ℓ̂)) of the run with :class:`~pnrotor.pn.settings.Settings` ``s`` from its
     forward result ``res_f`` and backward result ``res_b`` (None if not integrated), at ``s.sampling``."""
     mode = output_mode(s.use_aligned, s.rotor)
-    fixed = _fixed(s)
+    fixed = fixed_parts(s)
     if s.sampling in ("final", "steps"):
         return _sample_steps(s.sampling, mode, fixed, res_f, res_b)
     if res_b is not None and res_b.dense is None:
         res_b = None   # a backward half that took no step has no sample but t = 0, the forward half's
     if s.sampling == "dt":
         dt = s.sampling_value / s.M_sec
-        _check_memory((_t_end(res_f) - (0.0 if res_b is None else _t_end(res_b))) / dt, s)
-        t_out, nb = _uniform_times(dt, _t_end(res_f), None if res_b is None else _t_end(res_b))
+        _check_memory((t_end_of(res_f) - (0.0 if res_b is None else t_end_of(res_b))) / dt, s)
+        t_out, nb = _uniform_times(dt, t_end_of(res_f), None if res_b is None else t_end_of(res_b))
     else:
-        phi_i = _sys.YA_PHI if s.use_aligned else _sys.Y_PHI
+        phi_i = layout.YA_PHI if s.use_aligned else layout.Y_PHI
         _check_memory((res_f.y[-1, phi_i] - (0.0 if res_b is None else res_b.y[-1, phi_i]))
                       * s.sampling_value / (2.0 * math.pi), s)
         t_out, nb = _orbit_times(s.sampling_value, phi_i, res_f, res_b)
-    hist = _allocate_history(t_out.size, mode)
+    hist = allocate_history(t_out.size, mode)
     if nb:
         d = res_b.dense   # backward samples: visited from t = 0 downwards, the direction of integration
-        _fill_history(mode, d.seg_t, d.seg_h, d.coef, t_out[:nb], True, _NO_Y, *fixed, 0, *hist)
+        fill_history(mode, d.seg_t, d.seg_h, d.coef, t_out[:nb], True, NO_Y, *fixed, 0, *hist)
     d = res_f.dense
     if d is None:   # no step taken forward (a step underflow at once, max_steps = 1): the state at t = 0 alone
-        _fill_history(mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, np.ascontiguousarray(res_f.y[:1]), *fixed, nb,
+        fill_history(mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, np.ascontiguousarray(res_f.y[:1]), *fixed, nb,
                       *hist)
     else:
-        _fill_history(mode, d.seg_t, d.seg_h, d.coef, t_out[nb:], False, _NO_Y, *fixed, nb, *hist)
-    return t_out, _constant_rows(hist, mode, fixed, t_out.size)
+        fill_history(mode, d.seg_t, d.seg_h, d.coef, t_out[nb:], False, NO_Y, *fixed, nb, *hist)
+    return t_out, constant_rows(hist, mode, fixed, t_out.size)
 
 
-def _t_end(res):
+def t_end_of(res):
     """Where a half's integration ended (0 if it took no step)."""
     return 0.0 if res.dense is None else res.dense.t_max
 
@@ -360,12 +360,12 @@ def _sample_steps(sampling, mode, fixed, res_f, res_b):
     else:
         parts = ([(res_b.t[:0:-1], res_b.y[:0:-1])] if res_b is not None else []) + [(res_f.t, res_f.y)]
     t_out = np.concatenate([tp for tp, _ in parts])
-    hist = _allocate_history(t_out.size, mode)
+    hist = allocate_history(t_out.size, mode)
     off = 0
     for tp, Yp in parts:
-        _fill_history(mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, np.ascontiguousarray(Yp), *fixed, off, *hist)
+        fill_history(mode, _NO_SEG, _NO_SEG, _NO_COEF, _NO_T, False, np.ascontiguousarray(Yp), *fixed, off, *hist)
         off += tp.size
-    return t_out, _constant_rows(hist, mode, fixed, t_out.size)
+    return t_out, constant_rows(hist, mode, fixed, t_out.size)
 
 
 def uniform_range(dt, t_forward, t_backward):

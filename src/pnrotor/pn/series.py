@@ -1,7 +1,7 @@
 r"""Truncated post-Newtonian series with spin-dependent coefficients.
 
 This module owns the representation shared by :mod:`pnrotor.pn.energy`, :mod:`pnrotor.pn.flux` and the
-right-hand sides in :mod:`pnrotor.pn.system`:
+right-hand sides in :mod:`pnrotor.pn.rhs`:
 
 * a PN series is an array ``C[k, b, l]`` of shape ``(NK, NB, NL)`` meaning
 
@@ -37,7 +37,7 @@ k and the spin power.
 
 Tidal terms (linear in the deformabilities Λᵢ, spin-independent, b = 0) are the terms with k ≥ TIDAL_K = 10:
 no point-particle term reaches that power, so the rule above (k ≤ kmax[0] ≤ 9) drops them, and a fourth entry
-``kmax[3]`` (the tidal order × 2, or −1) keeps them separately: :func:`pnrotor.pn.system._add_tides` carries them
+``kmax[3]`` (the tidal order × 2, or −1) keeps them separately: :func:`pnrotor.pn.vdot.add_tides` carries them
 through the approximants' ratios to first order in Λ.
 
 The logarithm ln v is treated as an O(1) number (its coefficient is part of the v^k coefficient), the
@@ -252,6 +252,16 @@ def divide(N, D, kmax):
                 for l in range(NL):
                     Q[k, b, l] = 0.0
     return Q
+
+
+@njit(cache=True)
+def copy_into(src, dst):
+    """dst[...] = src for C-contiguous arrays of one shape, element by element: numba compiles an array assignment
+    with its shape-mismatch error message, whose string formatting took 5.4-5.7 s of a cold evolve_many (numba's
+    compile events; README, "Populations")."""
+    s, d = src.reshape(src.size), dst.reshape(dst.size)
+    for k in range(s.size):
+        d[k] = s[k]
 
 
 @njit(cache=True)

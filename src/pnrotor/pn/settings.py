@@ -19,9 +19,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import values
+from ..approximants import normalize_approximant
 from . import initial as _ini
 from .series import MAX_ORDER
-from .system import APPROXIMANTS
 
 MAX_SO_ORDER = 4.0
 MAX_SS_ORDER = 3.0
@@ -156,18 +157,18 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
                 else _order(spin_orbit_order, "spin_orbit_order", -1.0, MAX_SO_ORDER))
     ss_order = (min(pn_order, MAX_SS_ORDER) if spin_spin_order is None
                 else _order(spin_spin_order, "spin_spin_order", -1.0, MAX_SS_ORDER))
-    tidal_order = _tidal_order(tidal_order)
+    tidal_order = check_tidal_order(tidal_order)
     if rotor not in ROTORS:
         raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
     mode, sval = parse_sampling(sampling)
-    if not (_ini._real(atol) and _ini._real(rtol) and _ini._finite(atol) and _ini._finite(rtol) and atol > 0.0
+    if not (values.real(atol) and values.real(rtol) and values.finite(atol) and values.finite(rtol) and atol > 0.0
             and rtol >= 0.0):
         raise ValueError(f"atol must be > 0 and rtol >= 0, both finite numbers; got atol = {atol!r}, rtol = {rtol!r}")
-    if not (_ini._integer(max_steps) and 1 <= max_steps <= MAX_STEPS):
+    if not (values.integer(max_steps) and 1 <= max_steps <= MAX_STEPS):
         raise ValueError(f"max_steps must be an integer from 1 to {MAX_STEPS}, got {max_steps!r}")
-    if not isinstance(integrate_rotor, _ini._BOOLS):
+    if not isinstance(integrate_rotor, values.BOOLS):
         raise ValueError(f"integrate_rotor must be True or False, got {integrate_rotor!r}")
-    if precession_phase_shift is not None and not isinstance(precession_phase_shift, _ini._BOOLS):
+    if precession_phase_shift is not None and not isinstance(precession_phase_shift, values.BOOLS):
         raise ValueError(f"precession_phase_shift must be None (on at spin-orbit order >= 3), True or False, got "
                          f"{precession_phase_shift!r}")
     if precession not in PRECESSION:
@@ -177,7 +178,7 @@ def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
         precession_phase_shift = False
     if precession_phase_shift is None:
         precession_phase_shift = so_order >= 3.0
-    if not isinstance(horizon_absorption, _ini._BOOLS):
+    if not isinstance(horizon_absorption, values.BOOLS):
         raise ValueError(f"horizon_absorption must be True or False, got {horizon_absorption!r}")
     if horizon_absorption and precession == "instantaneous":
         raise ValueError("horizon_absorption needs the orbit-averaged precession ('averaged' or 'averaged_varpi'): its "
@@ -308,7 +309,7 @@ TIDAL_ORDERS = (0.0, 5.0, 6.0)
 """The tidal orders: none, 5PN (leading), 6PN (with the 1PN tidal terms; the default)."""
 
 
-def _tidal_order(x):
+def check_tidal_order(x):
     """A tidal order: 0, 5 or 6 (None: 6)."""
     if x is None:
         return 6.0
@@ -399,18 +400,6 @@ def _spin_content(c1, c2, ell):
     return content, a1 * ell, a2 * ell
 
 
-def normalize_approximant(approximant):
-    """'T1', 'T4' or 'T5' from 'Tn' (either case), 'TaylorTn' or 'SpinTaylorTn'; else a ValueError."""
-    a = str(approximant).strip()
-    for prefix in ("SpinTaylor", "Taylor"):
-        if a.startswith(prefix):
-            a = a[len(prefix):]
-    a = a.upper()
-    if a not in APPROXIMANTS:
-        raise ValueError(f"approximant must be one of T1, T4, T5 (or TaylorTn / SpinTaylorTn), got {approximant!r}")
-    return a
-
-
 def _order(x, name, lo, hi):
     """A PN order: a multiple of 0.5 in [lo, hi]."""
     if x is None:
@@ -423,7 +412,7 @@ def _order(x, name, lo, hi):
 
 def _float_or_nan(x):
     """float(x), or NaN for what is not a real number: a bool, text, None, an int beyond any float (10**400)."""
-    if isinstance(x, _ini._BOOLS + _ini._TEXT):
+    if isinstance(x, values.BOOLS + values.TEXT):
         return math.nan
     try:
         return float(x)
@@ -473,11 +462,11 @@ def parse_sampling(sampling):
         if key == "dt":
             return "dt", _ini.seconds(val, "sampling dt")
         if key == "per_orbit":
-            if not (_ini._real(val) and 1 <= val <= MAX_PER_ORBIT and val == int(val)):   # no NaN, inf, 10**400
+            if not (values.real(val) and 1 <= val <= MAX_PER_ORBIT and val == int(val)):   # no NaN, inf, 10**400
                 raise ValueError(f"sampling per_orbit must be an integer from 1 to 2^53, got {val!r}")
             return "per_orbit", int(val)
         raise ValueError(f"unknown sampling key {key!r}: sampling must be {SAMPLING_FORMS}; got {sampling!r}")
     # a bare number or Quantity: Δt in seconds
-    if not (_ini._real(sampling) or hasattr(sampling, "unit")):
+    if not (values.real(sampling) or hasattr(sampling, "unit")):
         raise ValueError(f"sampling must be {SAMPLING_FORMS}; got {sampling!r}")
     return "dt", _ini.seconds(sampling, "sampling dt")

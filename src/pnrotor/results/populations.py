@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pnrotor import approximants
 from pnrotor.results.schema import ARRAYS, M_UNIT, ROTOR, Array, check, register, short_repr
 
 INSPIRAL_ENDS = ("v_max", "energy_balance", "vdot_nonpositive", "vdot_peak", "vdot_divergent")
@@ -150,7 +151,7 @@ _STATE_ARRAYS = {
                              "(NaN: no f_min)", finite=False),
     "inputs/f_max_Hz": Array(("N",), "Hz; the state is the one at this GW frequency (NaN: no f_max; with "
                              "neither, the end of the inspiral)", finite=False),
-    "inputs/approximant": Array(("N",), "T1, T4 or T5", "str"),
+    "inputs/approximant": Array(("N",), approximants.names(), "str"),
     "inputs/pn_order": Array(("N",), "PN order of the nonspinning terms"),
     "inputs/spin_orbit_order": Array(("N",), "PN order of the spin-orbit terms (-1: none; NaN: pnrotor.evolve's "
                                      "default)", finite=False),

@@ -19,7 +19,7 @@ t = kΔt of ``sampling=Δt`` and nothing is computed per sample until asked:
 
 The modes and polarizations of a block are one compiled pass, :func:`_waves`, on the threads of
 :mod:`pnrotor.threads` (parts of ≥ 1 ms of work, :func:`pnrotor.threads.run_timed`): per block of 256 samples
-(``wigner._CHUNK``) the states from the dense output (:func:`pnrotor.pn.sampling._fill_history`, the kernel of
+(``wigner._CHUNK``) the states from the dense output (:func:`pnrotor.pn.sampling.fill_history`, the kernel of
 ``evolve``'s sampling, on the segments from the block's first), the co-orbital amplitudes and their rotation by
 𝔇 (:func:`pnrotor.waveform.amplitudes._block_start`, :func:`~pnrotor.waveform.amplitudes._block_ell`), then either
 the inertial modes stored, or, for h₊ − i h× = Σ_ℓm h_ℓm ₋₂Y_ℓm(ι, π/2 − φ_ref), the rotation taken to the frame of
@@ -28,7 +28,7 @@ rotation's second product, summed at once, so a polarizations call forms neither
 whose rotors turn about ẑ alone (aligned spins in the default frame) has no rotation to make: its inertial modes
 H_ℓm e^{−imΦ} are summed with their ₋₂Y_ℓm as they are formed (:func:`_harmonics`; less time a sample than
 the rotation).
-The history of :meth:`Stream.evolution` is ``_fill_history`` itself, a block at a time.
+The history of :meth:`Stream.evolution` is ``fill_history`` itself, a block at a time.
 
 The numbers are those of ``evolve(…, sampling=Δt)`` → ``modes(run, …)`` → ``Modes.polarizations(ι, φ_ref)``: the
 history and the modes bitwise (the same kernels on the same samples in the same blocks of 256: the parts and blocks
@@ -37,7 +37,7 @@ the tests' BBH, NSBH and BNS, which allow 1e-13; summing all the inertial modes,
 would give them bitwise at a higher cost), those of a run in frame "z" bitwise (that sum, term by term, tested on
 aligned and nonspinning BBH and BNS).  ``pnrotor.threads`` splits the samples, so the thread count does not change
 any of them.  The kernel holds
-``_fill_history`` (:mod:`pnrotor.pn.sampling`), the block functions of :mod:`pnrotor.waveform.amplitudes` and
+``fill_history`` (:mod:`pnrotor.pn.sampling`), the block functions of :mod:`pnrotor.waveform.amplitudes` and
 :func:`pnrotor.waveform.wigner._store` (numba caches per source file): after editing those, remove this module's
 ``__pycache__/stream.*.nb*``.
 """
@@ -52,8 +52,8 @@ from numba import njit
 from pnrotor import processes, threads
 from pnrotor.pn import initial as _ini
 from pnrotor.pn import sampling as _sampling
-from pnrotor.pn.evolve import _OPTIONS, Evolution, integrate
-from pnrotor.pn.sampling import MODE_ALIGNED, _fill_history
+from pnrotor.pn.evolve import OPTIONS, Evolution, integrate
+from pnrotor.pn.sampling import MODE_ALIGNED, fill_history
 from pnrotor.pn.settings import settings
 from pnrotor.waveform import amplitudes as _amp
 from pnrotor.waveform.layout import mode_index, n_modes
@@ -76,12 +76,12 @@ def stream(m1, m2, chi1, chi2, f_ref, *, delta_t, f_min=None, f_max=None, **opti
     integrated (its stages 1–3), its samples t = k Δt (``delta_t`` in seconds, or an astropy time) not computed
     yet: a :class:`Stream`.  ``options`` are evolve's other keywords (approximant, orders, frame, tolerances, …)."""
     wall0 = time.perf_counter()
-    unknown = sorted(name for name in options if name not in _OPTIONS or name == "sampling")
+    unknown = sorted(name for name in options if name not in OPTIONS or name == "sampling")
     if unknown:
         raise TypeError(f"unexpected keyword argument {unknown[0]!r} (the options are pnrotor.evolve's, with "
                         f"delta_t for its sampling)")
     delta_t = _ini.seconds(delta_t, "delta_t")
-    s = settings(m1, m2, chi1, chi2, f_ref, **{**_OPTIONS, **options, "f_min": f_min, "f_max": f_max,
+    s = settings(m1, m2, chi1, chi2, f_ref, **{**OPTIONS, **options, "f_min": f_min, "f_max": f_max,
                                                 "sampling": delta_t})
     res_f, res_b, termination, stats = integrate(s)
     stats["wall_time_s"] = time.perf_counter() - wall0
@@ -116,12 +116,12 @@ class Stream:
             res_b = None   # a backward half that took no step has no sample but t = 0, the forward half's
         self.settings, self.termination, self.stats, self.inputs = s, termination, stats, s.inputs()
         self._dt = s.sampling_value / s.M_sec
-        t_end = _sampling._t_end
+        t_end = _sampling.t_end_of
         k_lo, k_hi = _sampling.uniform_range(self._dt, t_end(res_f), None if res_b is None else t_end(res_b))
         self._k_lo, self._n, self._n_back = k_lo, k_hi - k_lo + 1, -k_lo
         self._forward, self._backward = _segments(res_f), _segments(res_b)
         self._mode = _sampling.output_mode(s.use_aligned, s.rotor)
-        self._fixed = _sampling._fixed(s)
+        self._fixed = _sampling.fixed_parts(s)
 
     def __len__(self):
         return self._n
@@ -136,13 +136,13 @@ class Stream:
         """The Evolution of samples lo … hi−1, by evolve's sampling kernel."""
         s, mode, fixed = self.settings, self._mode, self._fixed
         t = self._times(lo, hi)
-        hist = _sampling._allocate_history(t.size, mode)
+        hist = _sampling.allocate_history(t.size, mode)
         split = min(max(self._n_back - lo, 0), t.size)   # the backward half's samples come first
         if split:
-            _fill_history(mode, *self._backward, t[:split], True, _sampling._NO_Y, *fixed, 0, *hist)
+            fill_history(mode, *self._backward, t[:split], True, _sampling.NO_Y, *fixed, 0, *hist)
         if split < t.size:
-            _fill_history(mode, *self._forward, t[split:], False, _sampling._NO_Y, *fixed, split, *hist)
-        v, Phi, chi1, chi2, R, ell = _sampling._constant_rows(hist, mode, fixed, t.size)
+            fill_history(mode, *self._forward, t[split:], False, _sampling.NO_Y, *fixed, split, *hist)
+        v, Phi, chi1, chi2, R, ell = _sampling.constant_rows(hist, mode, fixed, t.size)
         return Evolution(t=t, t_seconds=t * s.M_sec, v=v, Phi=Phi, chi1=chi1, chi2=chi2, R=R, ell_hat=ell,
                          termination=self.termination, stats=dict(self.stats), inputs=dict(self.inputs))
 
@@ -385,7 +385,7 @@ def _binary_modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=No
 @njit(cache=True)
 def _segment(seg_t, seg_h, t):
     """The segment of a half's dense output that holds time t: the last whose start t has reached along the direction
-    of integration (where :func:`pnrotor.pn.sampling._fill_history`'s walk puts t; its first if none)."""
+    of integration (where :func:`pnrotor.pn.sampling.fill_history`'s walk puts t; its first if none)."""
     lo, hi = 0, seg_t.size - 1
     while lo < hi:
         mid = (lo + hi + 1) // 2
@@ -429,7 +429,7 @@ def _waves(mode, fwd_t, fwd_h, fwd_c, back_t, back_h, back_c, n_back, k_lo, dt, 
     their m = ±2), else (frame "z") Σ_ℓm h_ℓm Y_ℓm of the inertial modes with Y_ℓm = weights[2i] + i weights[2i + 1],
     i the mode's index, those with Y_ℓm = 0 skipped (:func:`_harmonics`); ``scale`` multiplies the modes as they are
     stored.  The other arguments are
-    :func:`pnrotor.pn.sampling._fill_history`'s (mode, R0, ell0, c1, c2) and
+    :func:`pnrotor.pn.sampling.fill_history`'s (mode, R0, ell0, c1, c2) and
     :func:`pnrotor.waveform.amplitudes._sum`'s (spins 0 or 2, frame, and
     :func:`~pnrotor.waveform.amplitudes.kernel_terms`)."""
     B = _CHUNK
@@ -455,11 +455,11 @@ def _waves(mode, fwd_t, fwd_h, fwd_c, back_t, back_h, back_c, n_back, k_lo, dt, 
         split = min(max(n_back - i0, 0), nb)
         if split > 0:   # walked from t = 0 down, as the backward half was integrated
             j = _segment(back_t, back_h, tq[split - 1])
-            _fill_history(mode, back_t[j:], back_h[j:], back_c[j:], tq[:split], True, no_y, R0, ell0, c1, c2, 0, v_b,
+            fill_history(mode, back_t[j:], back_h[j:], back_c[j:], tq[:split], True, no_y, R0, ell0, c1, c2, 0, v_b,
                           Phi_b, chi1_b, chi2_b, R_b, ell_b)
         if split < nb:
             j = _segment(fwd_t, fwd_h, tq[split])
-            _fill_history(mode, fwd_t[j:], fwd_h[j:], fwd_c[j:], tq[split:nb], False, no_y, R0, ell0, c1, c2, split,
+            fill_history(mode, fwd_t[j:], fwd_h[j:], fwd_c[j:], tq[split:nb], False, no_y, R0, ell0, c1, c2, split,
                           v_b, Phi_b, chi1_b, chi2_b, R_b, ell_b)
         if t.size:
             t[o:o + nb] = tq[:nb]
