@@ -89,7 +89,7 @@ class Arguments(NamedTuple):
 
 
 @functools.cache
-def _evolve_options():
+def evolve_options():
     """The keyword options of :func:`pnrotor.evolve` a host may pass through."""
     from pnrotor.pn.evolve import evolve
 
@@ -116,14 +116,14 @@ def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, s
     from pnrotor.pn.settings import MAX_SO_ORDER, MAX_SS_ORDER
     from pnrotor.waveform.modes import ELL_MAX
 
-    unknown = sorted(set(options) - _evolve_options() - {"ell_max"})
+    unknown = sorted(set(options) - evolve_options() - {"ell_max"})
     if unknown:
         host_set = [name for name in unknown if name in HOST_SET]
         if host_set:
             raise ValueError(f"{', '.join(host_set)}: set by the host's own keywords (approximant, delta_t, f_lower; "
                              f"the frame is L_N's at f_ref), not a pnrotor option here")
         raise ValueError(f"unknown option(s) {', '.join(map(repr, unknown))}: pnrotor's options here are "
-                         f"{', '.join(sorted(_evolve_options() | {'ell_max'}))}")
+                         f"{', '.join(sorted(evolve_options() | {'ell_max'}))}")
     if approximant not in APPROXIMANTS:
         raise ValueError(f"approximant must be one of {', '.join(APPROXIMANTS)}; got {approximant!r}")
     for name, value in (("f_lower", f_lower), ("f_ref", f_ref)):

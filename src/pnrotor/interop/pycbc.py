@@ -73,7 +73,7 @@ def _split(name, params):
         if key.startswith(("dchi", "dalpha", "dbeta")) and value:
             raise ValueError(f"{key} = {value!r}: {name} has no testing-GR deformations (leave it at 0)")
     options = {key: params[key] for key in SPINTAYLOR if key in params}
-    pipeline_options = pipelines._evolve_options() | {"ell_max"}
+    pipeline_options = pipelines.evolve_options() | {"ell_max"}
     known = _pycbc_parameters()
     for key, value in params.items():
         if key in pipeline_options:

@@ -262,12 +262,14 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
         Spin-induced quadrupole constants.
     lambda1, lambda2 : array_like (N,) or scalar
         Dimensionless tidal deformabilities Λᵢ (0 for black holes).
-    approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, rotor, precession_phase_shift, \
-integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
-        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries (with ``horizon_absorption`` every binary
-        is on the precessing state, its spins at the state's frequency changed by what the horizons absorbed; the
-        masses it leaves are not kept).
+    approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
+        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
+    rotor, precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
+        The same (with ``horizon_absorption`` every binary is on the precessing state, its spins at the state's
+        frequency changed by what the horizons absorbed; the masses it leaves are not kept).
 
+    Notes
+    -----
     The number of threads is :func:`pnrotor.threads.thread_count`'s (numba's: ``numba.set_num_threads``,
     ``NUMBA_NUM_THREADS``; at most :func:`pnrotor.threads.limit`'s).  Invalid shared
     options or array shapes raise a ValueError; an invalid binary does not (module docstring).

@@ -12,12 +12,12 @@ term), S_ℓm in row ℓ + m and A_ℓm in row ℓ − m, which then become H_�
 evaluated for a mode, an order or a spin quantity nobody asked for (none for a nonspinning run), and spins
 that are the same at every sample (aligned ones) are folded into the coefficients.
 
-:func:`_sum` runs over blocks of samples (``wigner._CHUNK``) with the samples innermost (the block functions
-:func:`_block_start` and :func:`_block_ell`, which :mod:`pnrotor.waveform.stream` calls too): per block v^k, ln v
+:func:`_sum` runs over blocks of samples (``wigner.CHUNK``) with the samples innermost (the block functions
+:func:`block_start` and :func:`block_ell`, which :mod:`pnrotor.waveform.stream` calls too): per block v^k, ln v
 (only if a term needs it) and the spin quantities — for a precessing run of spins taken from the inertial
 frame into each sample's orbital frame, χ' = R⁻¹ χ R — then per ℓ the amplitudes and, without writing them
 out, the rotation to the inertial frame: H itself (co-orbital), H_ℓm e^{−imΦ} (a nonprecessing run in its
-own frame) or 𝔇(R) H (:func:`pnrotor.waveform.wigner._rotate_ell`, only the columns m' with terms).
+own frame) or 𝔇(R) H (:func:`pnrotor.waveform.wigner.rotate_ell`, only the columns m' with terms).
 For a precessing run the sums and differences H_ℓm' ± H_ℓ,−m' that the rotation's first product takes are formed
 as H_ℓ,±m' are (:func:`_mirror`).  Only the powers of v and the spin quantities some term needs are formed.
 Measured (benchmarks/bench_modes.py, shared two-core machine), modes() per sample: precessing runs ~100–140 ns
@@ -44,20 +44,20 @@ from pnrotor.quaternion import qrotate_into
 from pnrotor.waveform import nonspinning, spin, tidal, wigner
 from pnrotor.waveform.layout import mode_index, n_modes
 from pnrotor.waveform.memory import terms as memory_terms
-from pnrotor.waveform.wigner import (_CHUNK, _phase_powers, _rotate_ell, _rotation_scratch, _rotor_block,
-                                     _rotor_rows, _store, rotation_plan)
+from pnrotor.waveform.wigner import (CHUNK, phase_powers, rotate_ell, rotation_scratch, rotor_block,
+                                     rotor_rows, store, rotation_plan)
 
 __all__ = ["table", "coorbital_modes", "modes_in_frame", "H0"]
 
 H0 = 8.0 * np.sqrt(np.pi / 5.0)
 """h₀ / (ν v²)."""
 
-_Q_ONE, _Q_LOG = 0, 1
+_Q_ONE, Q_LOG = 0, 1
 _Q_SPIN = {name: 2 + j for j, name in enumerate(spin.BASIS)}
-_Q_P = _Q_SPIN["P_nn"]
+Q_P = _Q_SPIN["P_nn"]
 """The first quadratic quantity: those from here on only if a term needs them."""
 N_Q = 2 + len(spin.BASIS)
-_FRAME_CODES = {"coorbital": 0, "z": 1, "rotors": 2}
+FRAME_CODES = {"coorbital": 0, "z": 1, "rotors": 2}
 """The frames :func:`_sum` gives the modes in: H, H_ℓm e^{−imΦ} for R = exp(Φẑ/2), 𝔇(R) H."""
 
 
@@ -97,7 +97,7 @@ def _source_terms(nu, delta, ell_max, spins, tides=NO_TIDES, memory=False):
     with ``spins`` the symmetric and the antisymmetric spin terms, with tides (k_max ≥ TIDAL_K) the tidal terms,
     with ``memory`` the memory terms.  Which terms these are does not depend on ν, δ or the Λᵢ."""
     out = [(ell, m, k, q, c, 1) for (ell, m), series in nonspinning.terms(nu, delta, ell_max).items()
-           for k, a, b in series for q, c in ((_Q_ONE, a), (_Q_LOG, b))]
+           for k, a, b in series for q, c in ((_Q_ONE, a), (Q_LOG, b))]
     if spins:
         for parity, group in zip((1, -1), spin.terms(nu, delta)):
             out += [(ell, m, k, _Q_SPIN[name], c, parity) for ell, m, k, name, c in group]
@@ -249,7 +249,7 @@ def _mirror(X, rp, rn, n, e_re, e_im, m, sig, fold, nb):
     """(h, hn) = (e (S + A), e* sig (S − A)*) = (U + V, sig (U − V)*) with U = e S, V = e A, from (S, A) = (h, hn):
     h, hn the rows rp, rn of X (real parts; imaginary parts n rows further), e row m of (e_re, e_im) (a loop of
     its own: LLVM vectorizes it here, not inline); with ``fold``, their sum and difference h ± hn instead, as the
-    rotation's first product takes them (:func:`pnrotor.waveform.wigner._rotate_ell`)."""
+    rotation's first product takes them (:func:`pnrotor.waveform.wigner.rotate_ell`)."""
     for s in range(nb):
         er, ei, sr, si, ar, ai = e_re[m, s], e_im[m, s], X[rp, s], X[n + rp, s], X[rn, s], X[n + rn, s]
         ur, ui, vr, vi = er * sr - ei * si, er * si + ei * sr, er * ar - ei * ai, er * ai + ei * ar
@@ -261,42 +261,42 @@ def _mirror(X, rp, rn, n, e_re, e_im, m, sig, fold, nb):
 
 
 @njit(cache=True)
-def _workspace(ell_max, k, B):
-    """The block arrays of :func:`_block_start` and :func:`_block_ell` for ℓ ≤ ell_max and blocks of B samples, as
+def workspace(ell_max, k, B):
+    """The block arrays of :func:`block_start` and :func:`block_ell` for ℓ ≤ ell_max and blocks of B samples, as
     one tuple: p (the powers of v up to the highest k of a term), Q (its row 0 and, for the spins of a constant
-    run, every row = 1), chi, X, the rotation's (:func:`pnrotor.waveform.wigner._rotation_scratch`) and the unit
+    run, every row = 1), chi, X, the rotation's (:func:`pnrotor.waveform.wigner.rotation_scratch`) and the unit
     phases one_re, one_im."""
     p = np.empty((1 + (k.max() if k.size else 0), B))
-    rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = _rotation_scratch(ell_max, B)
+    rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = rotation_scratch(ell_max, B)
     return (p, np.ones((N_Q, B)), np.empty((6, B)), np.empty((2 * (2 * ell_max + 1), B)), rq, eb_re, eb_im, ea_re,
             ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im, np.ones((ell_max + 1, B)), np.zeros((ell_max + 1, B)))
 
 
 @njit(cache=True)
-def _block_start(w, xs, cs, v, chi1, chi2, R, F, spins, frame, h0, logs, quadratic, X1, X2, kappa1, kappa2, i0, nb):
-    """What the ℓ of the samples i0 … i0+nb−1 share, into workspace ``w`` (:func:`_workspace`): the powers of v and
+def block_start(w, xs, cs, v, chi1, chi2, R, F, spins, frame, h0, logs, quadratic, X1, X2, kappa1, kappa2, i0, nb):
+    """What the ℓ of the samples i0 … i0+nb−1 share, into workspace ``w`` (:func:`workspace`): the powers of v and
     the spin quantities (:func:`_sample_block`, the spins taken into the frames of the rotors R; xs, cs its (3,)
     scratch) and the phases of ``frame`` for the rotors F (R, or R seen from another fixed frame): for "rotors" (2)
-    those of 𝔇(F) (:func:`pnrotor.waveform.wigner._rotor_block`), for "z" (1) e^{−imΦ}."""
+    those of 𝔇(F) (:func:`pnrotor.waveform.wigner.rotor_block`), for "z" (1) e^{−imΦ}."""
     p, Q, chi, X, rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im, one_re, one_im = w
     _sample_block(v, chi1, chi2, R, spins, i0, nb, h0, logs, quadratic, X1, X2, kappa1, kappa2, p, Q, chi, xs, cs)
     if frame == 2:
-        _rotor_block(F, i0, nb, rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
+        rotor_block(F, i0, nb, rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
     elif frame == 1:   # e^{−imΦ}: e^{−iΦ} = (w − iz)² / (w² + z²) for R = exp(Φẑ/2) = (w, 0, 0, z)
-        _rotor_rows(F, i0, nb, rq)
+        rotor_rows(F, i0, nb, rq)
         for s in range(nb):
             a, z = rq[0, s], rq[3, s]
             n2 = a * a + z * z
             eg_re[1, s], eg_im[1, s] = (a * a - z * z) / n2, -2.0 * a * z / n2
-        _phase_powers(eg_re, eg_im, nb)
+        phase_powers(eg_re, eg_im, nb)
 
 
 @njit(cache=True)
-def _block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb):
-    """The modes ℓ of the block :func:`_block_start` prepared, but their last phases: (o_re, o_im, e_re, e_im) with
-    h_ℓm = e_{|m|} o_{ℓ+m} for m ≥ 0 and e*_{|m|} o_{ℓ+m} for m < 0 (what :func:`pnrotor.waveform.wigner._store`
+def block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb):
+    """The modes ℓ of the block :func:`block_start` prepared, but their last phases: (o_re, o_im, e_re, e_im) with
+    h_ℓm = e_{|m|} o_{ℓ+m} for m ≥ 0 and e*_{|m|} o_{ℓ+m} for m < 0 (what :func:`pnrotor.waveform.wigner.store`
     applies): the amplitudes with the phases of ``frame`` (:func:`_ell_amplitudes`) and, for "rotors", rotated
-    (:func:`pnrotor.waveform.wigner._rotate_ell`)."""
+    (:func:`pnrotor.waveform.wigner.rotate_ell`)."""
     p, Q, chi, X, rq, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im, one_re, one_im = w
     n = X.shape[0] // 2
     H_re, H_im = X[:n], X[n:]
@@ -305,7 +305,7 @@ def _block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb
         (eg_re, eg_im, one_re, one_im) if frame == 1 else (one_re, one_im, one_re, one_im))
     _ell_amplitudes(ell, ell_start[ell], ell_start[ell + 1], target, k, q, c, p, Q, in_re, in_im, frame == 2, X, nb)
     if frame == 2:
-        _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, H_re, H_im, y_re, y_im, h_re, h_im, nb)
+        rotate_ell(ell, first, rows, coefs, eb_re, eb_im, H_re, H_im, y_re, y_im, h_re, h_im, nb)
         return h_re, h_im, out_re, out_im
     return H_re, H_im, out_re, out_im
 
@@ -314,23 +314,23 @@ def _block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb
 def _sum(v, chi1, chi2, R, spins, frame, scale, h0, logs, X1, X2, kappa1, kappa2, ell_max, ell_start, target, k, q,
          c, first, rows, coefs, out, lo, hi):
     """out, a float view (n_modes, 2N) of complex (n_modes, N), = the modes of the samples lo … hi−1 in frame
-    ``frame`` (:data:`_FRAME_CODES`), a block of samples at a time (lo a multiple of _CHUNK gives the blocks of the
+    ``frame`` (:data:`FRAME_CODES`), a block of samples at a time (lo a multiple of CHUNK gives the blocks of the
     whole range: the same vector and remainder loops, so the same bits), times ``scale`` as they are stored (module
     docstring; the other arguments are :func:`_sample_block`'s, :func:`_real_terms`' and
     :func:`pnrotor.waveform.wigner.rotation_plan`'s)."""
-    B = _CHUNK
-    w = _workspace(ell_max, k, B)
+    B = CHUNK
+    w = workspace(ell_max, k, B)
     xs, cs = np.empty(3), np.empty(3)
-    quadratic = np.any(q >= _Q_P)
+    quadratic = np.any(q >= Q_P)
     for i0 in range(lo, hi, B):
         nb = min(B, hi - i0)
-        _block_start(w, xs, cs, v, chi1, chi2, R, R, spins, frame, h0, logs, quadratic, X1, X2, kappa1, kappa2, i0,
+        block_start(w, xs, cs, v, chi1, chi2, R, R, spins, frame, h0, logs, quadratic, X1, X2, kappa1, kappa2, i0,
                      nb)
         for ell in range(2, ell_max + 1):
-            o_re, o_im, e_re, e_im = _block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb)
+            o_re, o_im, e_re, e_im = block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb)
             first_row = mode_index(ell, -ell)
             for r in range(2 * ell + 1):
-                _store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, out, first_row + r, i0, nb)
+                store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, out, first_row + r, i0, nb)
 
 
 def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.0, R=None, frame="coorbital",
@@ -356,8 +356,8 @@ def modes_in_frame(v, chi1, chi2, m1, m2, ell_max, order2, kappa1=1.0, kappa2=1.
     chi1, chi2 = (empty, empty) if not spins else (np.ascontiguousarray(x, dtype=np.float64) for x in (chi1, chi2))
     R = np.zeros((0, 4)) if R is None else np.ascontiguousarray(R, dtype=np.float64)
     out = np.empty((n_modes(ell_max), v.size), dtype=np.complex128)
-    args = (v, chi1, chi2, R, spins, _FRAME_CODES[frame], float(scale), *terms, out.view(np.float64))
-    threads.run(lambda lo, hi: _sum(*args, lo, hi), threads.parts(v.size, wigner.MIN_PART, _CHUNK))
+    args = (v, chi1, chi2, R, spins, FRAME_CODES[frame], float(scale), *terms, out.view(np.float64))
+    threads.run(lambda lo, hi: _sum(*args, lo, hi), threads.parts(v.size, wigner.MIN_PART, CHUNK))
     return out
 
 
@@ -378,7 +378,7 @@ def kernel_terms(m1, m2, ell_max, order2, kappa1, kappa2, spinning, constant=Non
         constants = tuple(Q[:, 0].tolist())
     ell_start, target, k, q, c, plan = _real_terms(nu, delta, int(ell_max), int(order2), bool(spinning), constants,
                                                    tuple(tides), bool(memory))
-    return (H0 * nu, bool(np.any(q == _Q_LOG)), X1, X2, float(kappa1), float(kappa2), int(ell_max), ell_start, target,
+    return (H0 * nu, bool(np.any(q == Q_LOG)), X1, X2, float(kappa1), float(kappa2), int(ell_max), ell_start, target,
             k, q, c, *plan)
 
 

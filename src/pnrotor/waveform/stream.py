@@ -19,9 +19,9 @@ t = kΔt of ``sampling=Δt`` and nothing is computed per sample until asked:
 
 The modes and polarizations of a block are one compiled pass, :func:`_waves`, on the threads of
 :mod:`pnrotor.threads` (parts of ≥ 1 ms of work, :func:`pnrotor.threads.run_timed`): per block of 256 samples
-(``wigner._CHUNK``) the states from the dense output (:func:`pnrotor.pn.sampling.fill_history`, the kernel of
+(``wigner.CHUNK``) the states from the dense output (:func:`pnrotor.pn.sampling.fill_history`, the kernel of
 ``evolve``'s sampling, on the segments from the block's first), the co-orbital amplitudes and their rotation by
-𝔇 (:func:`pnrotor.waveform.amplitudes._block_start`, :func:`~pnrotor.waveform.amplitudes._block_ell`), then either
+𝔇 (:func:`pnrotor.waveform.amplitudes.block_start`, :func:`~pnrotor.waveform.amplitudes.block_ell`), then either
 the inertial modes stored, or, for h₊ − i h× = Σ_ℓm h_ℓm ₋₂Y_ℓm(ι, π/2 − φ_ref), the rotation taken to the frame of
 the line of sight, where the sum over m is its m = 2 term alone (:func:`_line_of_sight`): one mode per ℓ of the
 rotation's second product, summed at once, so a polarizations call forms neither a history nor a mode array.  A run
@@ -38,7 +38,7 @@ would give them bitwise at a higher cost), those of a run in frame "z" bitwise (
 aligned and nonspinning BBH and BNS).  ``pnrotor.threads`` splits the samples, so the thread count does not change
 any of them.  The kernel holds
 ``fill_history`` (:mod:`pnrotor.pn.sampling`), the block functions of :mod:`pnrotor.waveform.amplitudes` and
-:func:`pnrotor.waveform.wigner._store` (numba caches per source file): after editing those, remove this module's
+:func:`pnrotor.waveform.wigner.store` (numba caches per source file): after editing those, remove this module's
 ``__pycache__/stream.*.nb*``.
 """
 
@@ -63,7 +63,7 @@ from pnrotor.waveform.distance import scale as _scale
 from pnrotor.waveform.modes import ELL_MAX, check_arguments, check_memory_flag, spins_and_frame, tides_of, wave_inputs
 from pnrotor.waveform import polarizations as _pol
 from pnrotor.waveform.modes import modes as modes_of_run
-from pnrotor.waveform.wigner import _CHUNK, _store
+from pnrotor.waveform.wigner import CHUNK, store
 
 __all__ = ["stream", "Stream", "Streamed", "polarizations", "modes"]
 
@@ -215,7 +215,7 @@ class Stream:
         *terms, first, rows, coefs = _amp.kernel_terms(s.m1, s.m2, ell_max, order2, s.kappa1, s.kappa2,
                                                        inputs["spin_content"] != "nonspinning", constant, tides,
                                                        memory)
-        if not np.any(terms[10] > _amp._Q_LOG):   # no term of a spin quantity (kernel_terms' q) at this order: the
+        if not np.any(terms[10] > _amp.Q_LOG):   # no term of a spin quantity (kernel_terms' q) at this order: the
             spins = 0                            # spins are not taken into the orbital frame per sample
         Rn, weights = _NONE, _NONE
         if direction is not None and frame == "z":
@@ -225,7 +225,7 @@ class Stream:
             frame = "rotors"
             first, rows, coefs = _m2_plan(first, rows, coefs, ell_max)
         return (self._mode, *self._forward, *self._backward, self._n_back, self._k_lo, self._dt, s.M_sec,
-                *self._fixed, Rn, spins, _amp._FRAME_CODES[frame], float(scale), *terms, first, rows, coefs), weights
+                *self._fixed, Rn, spins, _amp.FRAME_CODES[frame], float(scale), *terms, first, rows, coefs), weights
 
     def _run(self, args, weights, outputs, lo, hi):
         """:func:`_waves` over samples lo … hi−1 into ``outputs`` (those of sample lo first), in parts on the
@@ -235,7 +235,7 @@ class Stream:
 
             numba_cache.wait_for_aside("waves")
         call = (*args, weights, *outputs, lo)
-        threads.run_timed(lambda a, b: _waves(*call, lo + a, lo + b), hi - lo, _CHUNK)
+        threads.run_timed(lambda a, b: _waves(*call, lo + a, lo + b), hi - lo, CHUNK)
 
 
 def _line_of_sight(inclination, phi, ell_max):
@@ -421,7 +421,7 @@ def _times_rotor(a, R, nb, out):
 def _waves(mode, fwd_t, fwd_h, fwd_c, back_t, back_h, back_c, n_back, k_lo, dt, M_sec, R0, ell0, c1, c2, Rn, spins,
            frame, scale, h0, logs, X1, X2, kappa1, kappa2, ell_max, ell_start, target, k, q, c, first, rows, coefs,
            weights, t, t_s, Phi, R, modes, hp, hc, base, lo, hi):
-    """Samples lo … hi−1 (lo a multiple of _CHUNK: the blocks of the whole run) of the run whose halves' dense outputs
+    """Samples lo … hi−1 (lo a multiple of CHUNK: the blocks of the whole run) of the run whose halves' dense outputs
     are (fwd_*, back_*), n_back samples before t = 0, t = (k_lo + i) dt, into outputs whose row 0 is sample ``base``
     (an output of size 0 is not written): t (M), t_s (s), Phi, R (N, 4), and either the inertial modes (``modes``,
     a float view (n_modes, 2N) of complex (n_modes, N)) or h₊ and h× = Re, −Im of: given the rotor Rn of a line of
@@ -432,16 +432,16 @@ def _waves(mode, fwd_t, fwd_h, fwd_c, back_t, back_h, back_c, n_back, k_lo, dt, 
     :func:`pnrotor.pn.sampling.fill_history`'s (mode, R0, ell0, c1, c2) and
     :func:`pnrotor.waveform.amplitudes._sum`'s (spins 0 or 2, frame, and
     :func:`~pnrotor.waveform.amplitudes.kernel_terms`)."""
-    B = _CHUNK
+    B = CHUNK
     n_rows = 0 if mode == MODE_ALIGNED or spins == 0 else B   # an aligned run's spins and ℓ̂ are constant, and
     # without spin terms neither is used: no rows (the states then have v, Φ and R alone)
     tq = np.empty(B)
     v_b, Phi_b, R_b, F_b = np.empty(B), np.empty(B), np.empty((B, 4)), np.empty((B, 4))
     chi1_b, chi2_b, ell_b = np.empty((n_rows, 3)), np.empty((n_rows, 3)), np.empty((n_rows, 3))
     no_y = np.empty((0, 1))
-    w = _amp._workspace(ell_max, k, B)
+    w = _amp.workspace(ell_max, k, B)
     xs, cs = np.empty(3), np.empty(3)
-    quadratic = np.any(q >= _amp._Q_P)
+    quadratic = np.any(q >= _amp.Q_P)
     x = np.empty((1, 2 * B))
     acc_re, acc_im = np.empty(B), np.empty(B)
     Rn_inv = np.empty(4)
@@ -476,24 +476,24 @@ def _waves(mode, fwd_t, fwd_h, fwd_c, back_t, back_h, back_c, n_back, k_lo, dt, 
         if Rn.size:
             _times_rotor(Rn_inv, R_b, nb, F_b)
             F = F_b
-        _amp._block_start(w, xs, cs, v_b, chi1_b, chi2_b, R_b, F, spins, frame, h0, logs, quadratic, X1, X2, kappa1,
+        _amp.block_start(w, xs, cs, v_b, chi1_b, chi2_b, R_b, F, spins, frame, h0, logs, quadratic, X1, X2, kappa1,
                           kappa2, 0, nb)
         acc_re[:] = 0.0
         acc_im[:] = 0.0
         for ell in range(2, ell_max + 1):
-            o_re, o_im, e_re, e_im = _amp._block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb)
+            o_re, o_im, e_re, e_im = _amp.block_ell(w, ell, frame, ell_start, target, k, q, c, first, rows, coefs, nb)
             if Rn.size:   # h'_ℓ2 = e_2 o_{ℓ+2}, weighted
-                _store(o_re, o_im, ell + 2, e_re, e_im, 2, False, scale, x, 0, 0, nb)
+                store(o_re, o_im, ell + 2, e_re, e_im, 2, False, scale, x, 0, 0, nb)
                 _add_times(x, 0, weights[ell], 0.0, acc_re, acc_im, nb)
                 continue
             row0 = mode_index(ell, -ell)
             for r in range(2 * ell + 1):
                 if hp.size == 0:
-                    _store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, modes, row0 + r, o, nb)
+                    store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, modes, row0 + r, o, nb)
                     continue
                 y_re, y_im = weights[2 * (row0 + r)], weights[2 * (row0 + r) + 1]
                 if y_re != 0.0 or y_im != 0.0:   # h_ℓm ₋₂Y_ℓm (frame "z": the inertial modes)
-                    _store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, x, 0, 0, nb)
+                    store(o_re, o_im, r, e_re, e_im, abs(r - ell), r < ell, scale, x, 0, 0, nb)
                     _add_times(x, 0, y_re, y_im, acc_re, acc_im, nb)
         if hp.size:
             for b in range(nb):

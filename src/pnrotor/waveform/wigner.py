@@ -40,15 +40,15 @@ for every β, the poles included.  Of Δ only m, m' ≥ 0 is used: Δ_{μ,−m'}
 be normalized (v' = R v R⁻¹ does not see |R|).
 
 Layout of the computation: the modes are (n_modes, N) arrays, each mode's samples contiguous, and the
-samples are taken in blocks of ``_CHUNK``; within a block every loop runs over the samples innermost, each in
+samples are taken in blocks of ``CHUNK``; within a block every loop runs over the samples innermost, each in
 a small function of its own (LLVM vectorizes them there, not inline), so each is plain contiguous real
-arithmetic.  Per block :func:`_rotor_block` forms e^{iμβ}, (−i e^{−iα})^m and (i e^{−iγ})^m by recurrences in
+arithmetic.  Per block :func:`rotor_block` forms e^{iμβ}, (−i e^{−iα})^m and (i e^{−iγ})^m by recurrences in
 μ and m (from the rotors copied to rows first: a loop that indexes R[i0 + s] or any array at i0 + s is left
-scalar by LLVM); then per ℓ :func:`_rotate_ell` takes the sums and differences G_m' ± G_−m' of
+scalar by LLVM); then per ℓ :func:`rotate_ell` takes the sums and differences G_m' ± G_−m' of
 G_m' = (i e^{−iγ})^m' H_ℓm', does the first product (passes of :func:`rotation_plan`, each adding up to three terms
 of A and three of B to the rows ±μ, :func:`_pass`), the phases e^{±iμβ} with the sums and differences of the
 result, and the second product; the caller applies (i e^{−iγ})^m' and forms G_m' ± G_−m' before, and applies
-(−i e^{−iα})^m as it stores h (:func:`_store`).  Columns m' whose H_ℓm' vanish identically are left out of the
+(−i e^{−iα})^m as it stores h (:func:`store`).  Columns m' whose H_ℓm' vanish identically are left out of the
 first product.  :func:`rotate_modes` (:func:`_rotate`) reads H from an array, and :func:`wigner_D` is it applied to
 the columns of the identity; :func:`pnrotor.waveform.amplitudes.modes_in_frame` forms H block by block in the
 same pass instead, with its phases (i e^{−iγ})^m' and the sums and differences (no H array, no pass of its own
@@ -95,7 +95,7 @@ def d_half_pi(ell):
 
 
 def rotation_plan(columns):
-    """The passes of :func:`_rotate_ell` for columns[ℓ, |m'|] (ℓ = 0 … ℓ_max; false where H_ℓ,±m' vanish):
+    """The passes of :func:`rotate_ell` for columns[ℓ, |m'|] (ℓ = 0 … ℓ_max; false where H_ℓ,±m' vanish):
     ``(first, rows, coefs)``, the passes of ℓ's first product (over m') ``first[2ℓ] : first[2ℓ+1]`` and of its
     second (over m'') ``first[2ℓ+1] : first[2ℓ+2]``; pass k adds to the rows (rows[k, 0], rows[k, 1]) = (ℓ + μ,
     ℓ − μ) of its output (the spare row 2ℓ_max + 1 for μ = 0), from the rows rows[k, 2:8] of its input with the
@@ -130,7 +130,7 @@ def _plan(ell_max, columns):
             np.array(coefs, dtype=np.float64).reshape(-1, 6))
 
 
-_CHUNK = 256
+CHUNK = 256
 """Samples per block of :func:`_rotate` and of :func:`pnrotor.waveform.amplitudes._sum`."""
 
 MIN_PART = 1024
@@ -153,7 +153,7 @@ def _times_phase(x_re, x_im, r, e_re, e_im, u, conj, out_re, out_im, ro, nb):
 
 
 @njit(cache=True, fastmath={"contract"})
-def _store(x_re, x_im, r, e_re, e_im, u, conj, scale, out, row, i0, nb):
+def store(x_re, x_im, r, e_re, e_im, u, conj, scale, out, row, i0, nb):
     """out[row, 2i], out[row, 2i + 1] (i = i0 + s) = the real and imaginary parts of scale e x (scale e* x if
     conj) for rows r of x and u of e: complex numbers as (re, im) arrays into a float view of a complex array."""
     sg = -scale if conj else scale
@@ -165,7 +165,7 @@ def _store(x_re, x_im, r, e_re, e_im, u, conj, scale, out, row, i0, nb):
 
 
 @njit(cache=True)
-def _phase_powers(e_re, e_im, nb):
+def phase_powers(e_re, e_im, nb):
     """Rows m = 2, 3, … of e^m from rows 0 (= 1) and 1 (= e)."""
     for m in range(2, e_re.shape[0]):
         _times_phase(e_re, e_im, m - 1, e_re, e_im, 1, False, e_re, e_im, m, nb)
@@ -203,19 +203,19 @@ def _pass(y, x, rows, coefs, k, nb):
 
 
 @njit(cache=True)
-def _rotor_rows(R, i0, nb, q):
-    """Rows w, x, y, z of q (4, _CHUNK) = the rotors R[i0 : i0 + nb]: LLVM vectorizes a loop over rows, not over
-    R's strided columns (the loop of :func:`_rotor_block`)."""
+def rotor_rows(R, i0, nb, q):
+    """Rows w, x, y, z of q (4, CHUNK) = the rotors R[i0 : i0 + nb]: LLVM vectorizes a loop over rows, not over
+    R's strided columns (the loop of :func:`rotor_block`)."""
     for s in range(nb):
         for k in range(4):
             q[k, s] = R[i0 + s, k]
 
 
 @njit(cache=True, fastmath={"contract"}, error_model="numpy")
-def _rotor_block(R, i0, nb, q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im):
+def rotor_block(R, i0, nb, q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im):
     """Of the rotors R[i0 : i0 + nb], rows m ≥ 1 of e^{imβ}, (−i e^{−iα})^m and (i e^{−iγ})^m (module docstring;
-    rows 0, = 1, are :func:`_rotation_scratch`'s); q (4, _CHUNK) scratch (:func:`_rotor_rows`)."""
-    _rotor_rows(R, i0, nb, q)
+    rows 0, = 1, are :func:`rotation_scratch`'s); q (4, CHUNK) scratch (:func:`rotor_rows`)."""
+    rotor_rows(R, i0, nb, q)
     for s in range(nb):
         w, x, y, z = q[0, s], q[1, s], q[2, s], q[3, s]
         a2, b2 = w * w + z * z, x * x + y * y
@@ -233,9 +233,9 @@ def _rotor_block(R, i0, nb, q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im):
         n = 1.0 / (a * b)   # −i e^{−iα} = −i conj(R_a R_b) / (|R_a| |R_b|), i e^{−iγ} = i conj(R_a) R_b / (|R_a| |R_b|)
         ea_re[1, s], ea_im[1, s] = (w * x - z * y) * n, -(w * y + z * x) * n
         eg_re[1, s], eg_im[1, s] = (w * x + z * y) * n, (w * y - z * x) * n
-    _phase_powers(eb_re, eb_im, nb)
-    _phase_powers(ea_re, ea_im, nb)
-    _phase_powers(eg_re, eg_im, nb)
+    phase_powers(eb_re, eb_im, nb)
+    phase_powers(ea_re, ea_im, nb)
+    phase_powers(eg_re, eg_im, nb)
 
 
 @njit(cache=True)
@@ -247,10 +247,10 @@ def _passes(lo, hi, rows, coefs, x_re, x_im, y_re, y_im, nb):
 
 
 @njit(cache=True)
-def _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb):
+def rotate_ell(ell, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb):
     """Rows ℓ + m of (h_re, h_im) = Σ_μ Δ_{μm} e^{iμβ} Σ_m' Δ_{μm'} G_m' for G_m' = (i e^{−iγ})^m' H_ℓm', given as
     G_ℓ + G_−ℓ, …, G_0, …, G_ℓ − G_−ℓ in the rows of (G_re, G_im) (overwritten): h_ℓm before its factor
-    (−i e^{−iα})^m (:func:`_store`), for a block whose e^{iμβ} :func:`_rotor_block` gave, by the passes of
+    (−i e^{−iα})^m (:func:`store`), for a block whose e^{iμβ} :func:`rotor_block` gave, by the passes of
     :func:`rotation_plan` (first, rows, coefs: the columns m' where H_ℓ,±m' vanish are skipped), y scratch.  The
     second product's input rows ℓ ± ν become their sums and differences with their phases e^{±iνβ}."""
     _passes(first[2 * ell], first[2 * ell + 1], rows, coefs, G_re, G_im, y_re, y_im, nb)
@@ -260,8 +260,8 @@ def _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h
 
 
 @njit(cache=True)
-def _rotation_scratch(ell_max, B):
-    """The block arrays of :func:`_rotor_block` and :func:`_rotate_ell`: q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im
+def rotation_scratch(ell_max, B):
+    """The block arrays of :func:`rotor_block` and :func:`rotate_ell`: q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im
     (their rows 0 set here to 1, once), y_re, y_im, h_re, h_im (y and h with a spare row)."""
     n_m, n_rows = ell_max + 1, 2 * ell_max + 2
     e_re, e_im = np.empty((3, n_m, B)), np.empty((3, n_m, B))
@@ -273,14 +273,14 @@ def _rotation_scratch(ell_max, B):
 @njit(cache=True, nogil=True)
 def _rotate(H, R, ell_max, first, rows, coefs, h, lo, hi):
     """h[:, i] = 𝔇(R[i]) H[:, i] for i = lo … hi−1 of (n_modes, N) arrays (h as a float view, (n_modes, 2N)), a
-    block of _CHUNK samples at a time (lo a multiple of _CHUNK: the blocks of the whole range); every inner loop
+    block of CHUNK samples at a time (lo a multiple of CHUNK: the blocks of the whole range); every inner loop
     runs over the samples of the block (module docstring)."""
-    B = _CHUNK
-    q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = _rotation_scratch(ell_max, B)
+    B = CHUNK
+    q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im, y_re, y_im, h_re, h_im = rotation_scratch(ell_max, B)
     G_re, G_im = np.empty((2 * ell_max + 1, B)), np.empty((2 * ell_max + 1, B))
     for i0 in range(lo, hi, B):
         nb = min(B, hi - i0)
-        _rotor_block(R, i0, nb, q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
+        rotor_block(R, i0, nb, q, eb_re, eb_im, ea_re, ea_im, eg_re, eg_im)
         for ell in range(2, ell_max + 1):
             first_row = mode_index(ell, -ell)
             for r in range(2 * ell + 1):
@@ -290,9 +290,9 @@ def _rotate(H, R, ell_max, first, rows, coefs, h, lo, hi):
                 _times_phase(G_re, G_im, r, eg_re, eg_im, abs(r - ell), r < ell, G_re, G_im, r, nb)
             for nu in range(1, ell + 1):
                 _sum_difference(G_re, G_im, ell + nu, ell - nu, eb_re, eb_im, 0, nb)
-            _rotate_ell(ell, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb)
+            rotate_ell(ell, first, rows, coefs, eb_re, eb_im, G_re, G_im, y_re, y_im, h_re, h_im, nb)
             for r in range(2 * ell + 1):
-                _store(h_re, h_im, r, ea_re, ea_im, abs(r - ell), r < ell, 1.0, h, first_row + r, i0, nb)
+                store(h_re, h_im, r, ea_re, ea_im, abs(r - ell), r < ell, 1.0, h, first_row + r, i0, nb)
 
 
 def wigner_D(R, ell_max):
@@ -323,5 +323,5 @@ def rotate_modes(H, R, ell_max):
     h = np.empty_like(H)
     every_column = np.ones((ell_max + 1, ell_max + 1), dtype=np.bool_)
     args = (H, R, int(ell_max), *rotation_plan(every_column), h.view(np.float64))
-    threads.run(lambda lo, hi: _rotate(*args, lo, hi), threads.parts(R.shape[0], MIN_PART, _CHUNK))
+    threads.run(lambda lo, hi: _rotate(*args, lo, hi), threads.parts(R.shape[0], MIN_PART, CHUNK))
     return h
