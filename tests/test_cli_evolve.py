@@ -627,8 +627,8 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     monkeypatch.setattr(dop853, "compile_core_parts", lambda: here.append("core parts"))
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(in_tmp / "empty-cache"))
     cli_evolve._warn_if_cold()
-    assert capsys.readouterr().err == ("pnrotor: compiling its numba kernels for this machine, once (~10-25 s); "
-                                       "later runs load them in ~1-2 s\n")
+    assert capsys.readouterr().err == ("pnrotor: compiling its numba kernels for this machine, once (~10-25 s idle, up "
+                                       "to ~3x that on a busy machine); later runs load them in a few seconds\n")
     assert started == ["core"] and here == ["core parts"]
     core = Path(numba_cache.cache_folder()) / _index_file(dop853.core)
     assert core.parent.parent == in_tmp / "empty-cache"
@@ -637,7 +637,7 @@ def test_one_line_before_compiling_on_a_cold_cache(in_tmp, capsys, monkeypatch):
     cli_evolve._warn_if_cold()
     assert capsys.readouterr().err == "" and started == ["core"]
     cli_evolve._warn_if_cold(modes=True)
-    assert "(~20-35 s)" in capsys.readouterr().err and started == ["core", "modes"] and here == ["core parts"]
+    assert "(~20-35 s idle" in capsys.readouterr().err and started == ["core", "modes"] and here == ["core parts"]
     kernels = Path(numba_cache.cache_folder("waveform")) / _index_file(amplitudes._sum)
     assert kernels.parent.parent == in_tmp / "empty-cache"
     kernels.parent.mkdir(parents=True)

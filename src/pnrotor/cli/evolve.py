@@ -167,8 +167,8 @@ def _warn_if_cold(here=True, population=False, modes=False, streamed=False):
     if core or waves or population and numba_cache.is_cold("many._integrate_all", "pn"):
         # on a 2-core VM in its fast and slow phases (benchmarks/bench_cold_start.py)
         wait = "~35-45" if population else "~20-35" if waves else "~10-25"
-        print(f"pnrotor: compiling its numba kernels for this machine, once ({wait} s); later runs load them in ~1-2 s",
-              file=sys.stderr, flush=True)
+        print(f"pnrotor: compiling its numba kernels for this machine, once ({wait} s idle, up to ~3x that on a busy "
+              "machine); later runs load them in a few seconds", file=sys.stderr, flush=True)
         if here and core:
             numba_cache.compile_aside("core")
         if here and waves:
