@@ -13,7 +13,7 @@ import pytest
 import pnrotor
 from pnrotor import hdf5, threads
 from pnrotor.waveform import stream as S
-from pnrotor.waveform.layout import ell_m, mode_index
+from pnrotor.waveform.layout import ell_m
 from pnrotor.waveform.polarizations import swsh
 from pnrotor.waveform.wigner import wigner_D
 

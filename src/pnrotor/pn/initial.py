@@ -17,9 +17,7 @@ import math
 
 import numpy as np
 
-from pnrotor.values import BOOLS as _BOOLS, TEXT as _TEXT, finite as _finite, in_unit  # noqa: F401 - pn's names
-from pnrotor.values import integer as _integer, positive as _positive, real as _real  # noqa: F401
-
+from pnrotor.values import BOOLS as _BOOLS, positive as _positive
 MTSUN_SI = 4.9254909476412675e-06
 """G M☉ / c³ in seconds (IAU 2015 nominal GM☉ = 1.3271244e20 m³/s², c = 299792458 m/s)."""
 
