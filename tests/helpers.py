@@ -2,6 +2,8 @@
 
 import importlib
 import signal
+import subprocess
+import sys
 
 import pytest
 
@@ -51,3 +53,15 @@ def default_signals():
     started in the background has SIGINT ignored, one under nohup SIGHUP)."""
     for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         signal.signal(signum, signal.SIG_DFL)
+
+
+def kill_9_after(script, *args, line):
+    """Run ``python -c script *args`` and send it SIGKILL once it has printed ``line`` (asserted: its first line)."""
+    process = subprocess.Popen([sys.executable, "-c", script, *map(str, args)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout.readline() == line + "\n"
+        process.send_signal(signal.SIGKILL)
+        process.wait(timeout=30)
+    finally:
+        process.kill()
+        process.stdout.close()

@@ -6,6 +6,7 @@ import os
 
 import numpy as np
 import pytest
+from helpers import kill_9_after
 from test_cli_evolve import assert_same_run
 
 import pnrotor
@@ -310,20 +311,8 @@ batch.run(sys.argv[1], sys.argv[2], jobs=1)
 def test_batch_killed_with_sigkill_resumes(table, tmp_path):
     """kill -9 while the third row runs: the two finished runs survive in OUT.parts and resume completes the
     batch, equal to single evolve calls."""
-    import signal
-    import subprocess
-    import sys
-
     out = tmp_path / "out.h5"
-    process = subprocess.Popen([sys.executable, "-c", KILLED_SERIAL, str(table), str(out)], stdout=subprocess.PIPE,
-                               text=True)
-    try:
-        assert process.stdout.readline() == "two done\n"
-        process.send_signal(signal.SIGKILL)
-        process.wait(timeout=30)
-    finally:
-        process.kill()
-        process.stdout.close()
+    kill_9_after(KILLED_SERIAL, table, out, line="two done")
     assert not out.exists() and hdf5.list_runs(tmp_path / "out.h5.parts" / "runs.h5") == ["a", "b"]
     outcome = batch.run(table, out, jobs=1, resume=True)
     assert outcome.written == 3

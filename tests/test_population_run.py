@@ -5,12 +5,11 @@ grow with the table (the table read as chunks finish)."""
 
 import os
 import signal
-import subprocess
-import sys
 
 import h5py
 import numpy as np
 import pytest
+from helpers import kill_9_after
 
 from pnrotor import hdf5
 from pnrotor.batch import backends, population
@@ -115,15 +114,7 @@ def test_killed_with_sigkill_then_resumed_equals_uninterrupted(serial, table, tm
     """kill -9 in the fourth chunk: the three finished chunks stay in OUT.parts, and resume computes the four others
     only (counted), giving the uninterrupted run's file and failures."""
     out = tmp_path / "out.h5"
-    process = subprocess.Popen([sys.executable, "-c", KILLED, str(table), str(out), str(CHUNK)], stdout=subprocess.PIPE,
-                               text=True)
-    try:
-        assert process.stdout.readline() == "three chunks done\n"
-        process.send_signal(signal.SIGKILL)
-        process.wait(timeout=30)
-    finally:
-        process.kill()
-        process.stdout.close()
+    kill_9_after(KILLED, table, out, CHUNK, line="three chunks done")
     parts = tmp_path / "out.h5.parts"
     assert not out.exists() and sorted(p.name for p in parts.glob("chunk-*.json")) == [f"chunk-{k}.json"
                                                                                         for k in range(3)]
