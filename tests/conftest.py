@@ -85,6 +85,25 @@ def cold_python(tmp_path):
     return run
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _warm_numba_cache():
+    """The kernels whose absence makes the CLI say one line before compiling (`pnrotor.cli.evolve._warn_if_cold`)
+    compiled into numba's cache before the first test, if missing: otherwise whether a test asserting a CLI's stderr
+    sees that line depends on the tests that ran before it (the random order; a clean clone's cold cache).  The line
+    itself is tested with an empty NUMBA_CACHE_DIR (test_cli_evolve.py)."""
+    from pnrotor import numba_cache
+    if numba_cache.is_cold():
+        from pnrotor.ode.dop853 import compile_core
+        compile_core()
+    for kernel, package, module in (("amplitudes._sum", "waveform", "pnrotor.waveform.amplitudes"),
+                                    ("stream._waves", "waveform", "pnrotor.waveform.stream")):
+        if numba_cache.is_cold(kernel, package):
+            importlib.import_module(module).compile_kernels()
+    if numba_cache.is_cold("many._integrate_all", "pn"):
+        from pnrotor import evolve_many
+        evolve_many([10.0], [10.0], [(0.0, 0.0, 0.1)], [(0.0, 0.0, 0.0)], 20.0)
+
+
 @pytest.fixture(autouse=True)
 def _process_state():
     """After each test: the signal handlers and this thread's signal mask as before it, and no idle worker thread
