@@ -90,10 +90,10 @@ def test_unknown_keywords_and_wrong_options_are_type_errors():
 def test_resolved_defaults():
     """The defaults a run uses follow from the fields: spin orders min(pn_order, 4) and min(pn_order, 3), the phase
     shift at spin-orbit order >= 3, 'instantaneous' on the orbital rotor without it, tidal order 6."""
-    r = dict(zip(options_module.OPTION_NAMES, Options(pn_order=2.5, approximant="spintaylort1").resolved))
+    r = dict(zip(options_module.OPTION_DEFAULTS, Options(pn_order=2.5, approximant="spintaylort1").resolved))
     assert (r["approximant"], r["spin_orbit_order"], r["spin_spin_order"], r["precession_phase_shift"],
             r["tidal_order"]) == ("T1", 2.5, 2.5, False, 6.0)
-    r = dict(zip(options_module.OPTION_NAMES, Options(precession="instantaneous").resolved))
+    r = dict(zip(options_module.OPTION_DEFAULTS, Options(precession="instantaneous").resolved))
     assert (r["rotor"], r["precession_phase_shift"], r["spin_orbit_order"], r["spin_spin_order"]) == (
         "orbital", False, 3.5, 3.0)
 
@@ -106,16 +106,31 @@ def test_one_place_for_names_and_defaults():
     for name in ("ell_hat", "n_hat", "kappa1", "kappa2", "lambda1", "lambda2", "options"):
         assert many[name].default == OPTIONS[name], name
     for name, default in options_module.DEFAULTS.items():
-        expected = getattr(Options(), name) if name in options_module.OPTION_NAMES else OPTIONS[name]
+        expected = getattr(Options(), name) if name in options_module.OPTION_DEFAULTS else OPTIONS[name]
         assert default == expected, name
-    assert set(options_module.TABLE_OPTIONS) <= set(options_module.OPTION_NAMES)
+    assert set(options_module.TABLE_OPTIONS) <= set(options_module.OPTION_DEFAULTS)
     assert {"pn_order", "atol", "max_steps", "kappa1"} <= evolve_options()
     assert "options" not in evolve_options() and "approximant" not in evolve_options()
 
 
 def test_options_and_the_cli_help_load_no_numba():
-    """The CLI reads the names, defaults and ranges before numba loads (its cold-start promise)."""
-    code = ("import sys, pnrotor.options, pnrotor.cli.evolve; o = pnrotor.Options(pn_order=2); "
-            "assert 'numba' not in sys.modules, 'numba'; print(o.resolved[1])")
+    """The CLI's parser reads the names, defaults and ranges without numpy or numba (its cold-start promise); making
+    an Options loads numpy, not numba."""
+    code = ("import sys, pnrotor.options; from pnrotor.cli import build_parser; build_parser(); "
+            "assert not {'numpy', 'numba'} & set(sys.modules); o = pnrotor.Options(pn_order=2); "
+            "assert 'numba' not in sys.modules; print(o.resolved[1])")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and done.stdout == "2.0\n", done.stderr
+
+
+def test_keywords_made_once_stay_apart_by_type():
+    """The Options of repeated keywords are made once (options_of's cache), keyed by type too: True then 1 still
+    refuses 1; 3 and 3.0 keep what was given; an unhashable value is checked without the cache."""
+    of = options_module.options_of
+    assert of(None, {"integrate_rotor": True}, "evolve") is of(None, {"integrate_rotor": True}, "evolve")
+    with pytest.raises(ValueError, match="integrate_rotor must be True or False, got 1"):
+        of(None, {"integrate_rotor": 1}, "evolve")
+    assert type(of(None, {"pn_order": 3.0}, "evolve").pn_order) is float
+    assert type(of(None, {"pn_order": 3}, "evolve").pn_order) is int
+    with pytest.raises(ValueError, match="pn_order must be a multiple of 0.5"):
+        of(None, {"pn_order": [3.0]}, "evolve")

@@ -6,15 +6,16 @@ allowed ranges and checks them, for `pnrotor.evolve`, `pnrotor.evolve_many`, the
 The PN orders follow the truncated series of :mod:`pnrotor.pn.series` (point-particle terms to 4.5PN), the
 spin-orbit terms of Bohé et al. 2013 (to 4PN in the energy and flux) and the spin-spin terms to 3PN
 (:mod:`pnrotor.pn.energy`, :mod:`pnrotor.pn.flux`, :mod:`pnrotor.pn.precession`); the tidal orders are those of
-Vines, Flanagan & Hinderer 2011 (5PN, 6PN).
+Vines, Flanagan & Hinderer 2011 (5PN, 6PN).  numpy is imported when the first Options is made, not before (the CLI's
+parser loads neither numpy nor numba).
 """
 
 import dataclasses
+import functools
 
-from pnrotor import values
 from pnrotor.approximants import normalize_approximant
 
-__all__ = ["Options", "options_of", "OPTION_NAMES", "REQUIRED", "DEFAULTS", "COLUMNS", "TABLE_OPTIONS"]
+__all__ = ["Options", "options_of", "OPTION_DEFAULTS", "REQUIRED", "DEFAULTS", "COLUMNS", "TABLE_OPTIONS"]
 
 MAX_ORDER = 4.5
 """The highest PN order of the point-particle terms (:mod:`pnrotor.pn.series`, k = 9)."""
@@ -110,18 +111,38 @@ def options_of(options, keywords, caller):
     """The :class:`Options` of a call to ``caller`` (its name, for errors): ``options`` (None: the defaults) with the
     fields in ``keywords`` replaced; a TypeError for a keyword that is not an option, or for ``options`` not an
     Options."""
-    unknown = [name for name in keywords if name not in OPTION_NAMES]
+    unknown = [name for name in keywords if name not in OPTION_DEFAULTS]
     if unknown:
         raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r}")
     if options is None:
-        return Options(**keywords) if keywords else DEFAULT
+        if not keywords:
+            return _default()
+        try:
+            return _made(tuple((name, type(value), value) for name, value in keywords.items()))
+        except TypeError:   # a value that cannot be a key (an array, an astropy Quantity): checked anew
+            return Options(**keywords)
     if not isinstance(options, Options):
         raise TypeError(f"{caller}(): options must be a pnrotor.Options, got {type(options).__name__}")
     return dataclasses.replace(options, **keywords) if keywords else options
 
 
+@functools.cache
+def _default():
+    """Options(): what a call given no options uses."""
+    return Options()
+
+
+@functools.lru_cache(maxsize=64)
+def _made(items):
+    """Options of the keywords (name, type, value) ``items``, made once for calls that repeat them (making one costs
+    ~5 µs, a tenth of a short run's Python work); the type is in the key, so 1 and True, or 3 and 3.0, stay apart."""
+    return Options(**{name: value for name, _, value in items})
+
+
 def _resolve(o):
     """:attr:`Options.resolved` of ``o``, each field checked (a ValueError naming the first bad one)."""
+    from pnrotor import values
+
     approximant = normalize_approximant(o.approximant)
     pn_order = _order(o.pn_order, "pn_order", 0.0, MAX_ORDER)
     so_order = (min(pn_order, MAX_SO_ORDER) if o.spin_orbit_order is None
@@ -161,9 +182,11 @@ def _resolve(o):
 
 def check_tidal_order(x):
     """A tidal order: 0, 5 or 6 (None: 6)."""
+    from pnrotor.values import float_or_nan
+
     if x is None:
         return 6.0
-    value = values.float_or_nan(x)
+    value = float_or_nan(x)
     if value not in TIDAL_ORDERS:
         raise ValueError(f"tidal_order must be 0 (no tides), 5 or 6 (PN orders of the tidal terms; None: 6), got {x!r}")
     return value
@@ -171,29 +194,30 @@ def check_tidal_order(x):
 
 def _order(x, name, lo, hi):
     """A PN order: a multiple of 0.5 in [lo, hi]."""
+    from pnrotor.values import float_or_nan
+
     if x is None:
         raise ValueError(f"{name} is required")
-    value = values.float_or_nan(x)
+    value = float_or_nan(x)
     if not (lo <= value <= hi) or abs(2 * value - round(2 * value)) > 1e-12:
         raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {x!r}")
     return value
 
 
-OPTION_NAMES = tuple(field.name for field in dataclasses.fields(Options))
-DEFAULT = Options()
-"""The defaults (a run given no options uses this one)."""
+OPTION_DEFAULTS = {field.name: field.default for field in dataclasses.fields(Options)}
+"""The fields of :class:`Options` and their defaults."""
 
 
 REQUIRED = ("m1", "m2", "chi1", "chi2", "f_ref")
 """The columns every row of a batch table fills."""
 _PER_RUN = {"f_min": None, "f_max": None, "sampling": "steps", "lambda1": 0.0, "lambda2": 0.0}
-DEFAULTS = {name: _PER_RUN[name] if name in _PER_RUN else getattr(DEFAULT, name)
+DEFAULTS = {name: _PER_RUN[name] if name in _PER_RUN else OPTION_DEFAULTS[name]
             for name in ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "f_min",
                          "f_max", "sampling", "atol", "lambda1", "lambda2", "tidal_order", "horizon_absorption")}
 """The optional columns of a batch table (a DataFrame's for `pnrotor.evolve_many`, the CLI's options) and their
 defaults: those of :class:`Options` and of `pnrotor.evolve`'s keywords (None: evolve's own choice)."""
 COLUMNS = REQUIRED + tuple(DEFAULTS) + ("name",)
 """Columns of a batch CSV file (keys of a TOML ``[[binary]]`` table): the option names with ``_``."""
-TABLE_OPTIONS = tuple(name for name in DEFAULTS if name in OPTION_NAMES)
+TABLE_OPTIONS = tuple(name for name in DEFAULTS if name in OPTION_DEFAULTS)
 """The options a batch table sets per row: `evolve_many` takes them as shared by its binaries (one call per
 combination; one value per DataFrame)."""

@@ -41,7 +41,7 @@ from pathlib import Path
 from pnrotor import approximants
 from pnrotor.batch.table import COLUMNS, DEFAULTS, REQUIRED, default_name, parse_sampling, parse_vector
 from pnrotor.cli import UsageError
-from pnrotor.options import DEFAULT, MAX_ORDER, MAX_SO_ORDER, MAX_SS_ORDER, PRECESSION
+from pnrotor.options import OPTION_DEFAULTS, MAX_ORDER, MAX_SO_ORDER, MAX_SS_ORDER, PRECESSION
 
 DEFAULT_FOLDER = "waveforms"
 ELL_MAX, AMPLITUDE_ORDER = 8, 3.5
@@ -76,14 +76,14 @@ def add_parser(subparsers):
     model.add_argument("--approximant", help=f"{approximants.names()} (default {DEFAULTS['approximant']}; also "
                        "TaylorT4, SpinTaylorT4, ...)")
     model.add_argument("--pn-order", type=float, metavar="ORDER",
-                       help=f"PN order of the nonspinning terms, 0 ... {MAX_ORDER:g} (default {DEFAULT.pn_order:g})")
+                       help=f"PN order of the nonspinning terms, 0 ... {MAX_ORDER:g} (default {OPTION_DEFAULTS['pn_order']:g})")
     model.add_argument("--spin-orbit-order", type=float, metavar="ORDER",
                        help=f"PN order of the spin-orbit terms, -1 ... {MAX_SO_ORDER:g} (default min(pn-order, "
                        f"{MAX_SO_ORDER:g}); -1: none)")
     model.add_argument("--spin-spin-order", type=float, metavar="ORDER",
                        help=f"PN order of the spin-spin terms, -1 ... {MAX_SS_ORDER:g} (default min(pn-order, "
                        f"{MAX_SS_ORDER:g}); -1: none)")
-    model.add_argument("--precession", choices=PRECESSION, help=f"spin precession model (default: {DEFAULT.precession})")
+    model.add_argument("--precession", choices=PRECESSION, help=f"spin precession model (default: {OPTION_DEFAULTS['precession']})")
     model.add_argument("--f-min", type=float, metavar="HZ",
                        help="also integrate backward from f_ref down to this GW frequency")
     model.add_argument("--f-max", type=float, metavar="HZ",
@@ -91,7 +91,7 @@ def add_parser(subparsers):
     model.add_argument("--sampling", metavar="S",
                        help="steps (every integrator step, default), final (only the final state), a time step in "
                        "seconds (e.g. 1/4096 or 0.000244) or per_orbit:N (N points per orbit)")
-    model.add_argument("--atol", type=float, help=f"absolute tolerance of the integrator (default {DEFAULT.atol:g}; rtol {DEFAULT.rtol:g})")
+    model.add_argument("--atol", type=float, help=f"absolute tolerance of the integrator (default {OPTION_DEFAULTS['atol']:g}; rtol {OPTION_DEFAULTS['rtol']:g})")
     model.add_argument("--lambda1", type=float, metavar="LAMBDA",
                        help="dimensionless tidal deformability of body 1 (as LALSuite's lambda1; default 0)")
     model.add_argument("--lambda2", type=float, metavar="LAMBDA",

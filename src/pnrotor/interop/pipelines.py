@@ -91,10 +91,10 @@ class Arguments(NamedTuple):
 def evolve_options():
     """The keyword options of :func:`pnrotor.evolve` a host may pass through: its named keywords and the fields of
     :class:`pnrotor.Options` (each by name, not ``options`` itself), but those the host sets."""
-    from pnrotor.options import OPTION_NAMES
+    from pnrotor.options import OPTION_DEFAULTS
     from pnrotor.pn.evolve import OPTIONS
 
-    return frozenset(name for name in (*OPTIONS, *OPTION_NAMES) if name not in HOST_SET + ("tidal_order", "options"))
+    return frozenset(name for name in (*OPTIONS, *OPTION_DEFAULTS) if name not in HOST_SET + ("tidal_order", "options"))
 
 
 def _lal_order(value, name, highest):
