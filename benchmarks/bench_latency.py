@@ -30,7 +30,7 @@ from pnrotor.ode import AFTER_STEP_SIG, by_address
 from pnrotor.ode.common import OUT_FINAL, OUT_STEPS, entry_point, function_addresses, no_after_step
 from pnrotor.ode.dop853 import CORE_SIG, core
 from pnrotor.pn import evolve, lalsuite_orders
-from pnrotor.pn.evolve import CONTROLLER, Evolution, _stats, build_system, half, integrate_half, termination
+from pnrotor.pn.evolve import CONTROLLER, OPTIONS, Evolution, _stats, build_system, half, integrate_half, termination
 from pnrotor.pn.sampling import sample
 from pnrotor.pn.settings import settings
 
@@ -40,9 +40,7 @@ BINARIES = {
     "precessing 30+10": (30.0, 10.0, (0.6, 0.0, 0.2), (0.0, -0.4, 0.1), 20.0),
     "nonspinning 1.4+1.4": (1.4, 1.4, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 30.0),
 }
-DEFAULTS = dict(f_min=None, f_max=None, approximant="T4", ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0),
-                kappa1=1.0, kappa2=1.0, atol=1e-12, rtol=0.0, rotor="coprecessing", integrate_rotor=False,
-                precession="averaged", max_steps=2_000_000, **ORDERS)
+DEFAULTS = dict(OPTIONS, **ORDERS)
 
 
 def median_us(f, calls):

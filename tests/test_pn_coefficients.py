@@ -346,7 +346,7 @@ def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
     (evolve.build_system): each row must be bitwise the other's (p, y0, the spin invariants, the start checks),
     whatever the order of the rows taken from the spin-independent parts."""
     from pnrotor.pn.evolve import OPTIONS, build_rows, build_system, population_parts
-    from pnrotor.pn.settings import Options, population_settings, settings
+    from pnrotor.pn.settings import Checked, population_settings, settings
     rng = np.random.default_rng(12)
     n = 40
     m1, m2 = rng.uniform(5.0, 40.0, n), rng.uniform(1.0, 20.0, n)
@@ -361,7 +361,7 @@ def test_the_start_rows_of_a_population_are_bitwise_those_of_each_binary(spins):
     X1 = np.empty(n)
     X1[order] = [s.X1 for s in ss]
     parts = population_parts(ss[0], X1, np.full(n, 4.0), np.full(n, 2.0))
-    o = Options(*(getattr(ss[0], name) for name in Options._fields))
+    o = Checked(*(getattr(ss[0], name) for name in Checked._fields))
     rows = population_settings(o, m1, m2, c1, c2, np.full(n, 20.0), np.full(n, np.nan), 200.0 + np.arange(n),
                                np.tile(ell, (n, 1)), np.tile([0.0, 1.0, 0.0], (n, 1)), np.full(n, 4.0), np.full(n, 2.0))
     assert rows.valid.all()

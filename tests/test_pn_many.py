@@ -421,9 +421,9 @@ def test_population_settings_are_binary_settings_row_by_row(integrate_rotor):
     """evolve_many checks and converts a whole population at once (settings.population_settings): a row it calls
     valid must hold bitwise binary_settings' numbers (signed zeros too), and binary_settings must refuse every row
     it does not call valid (each edge row fails one check, or sits just inside a bound)."""
-    from pnrotor.pn.settings import binary_settings, options, population_settings
-    o = options("T4", 3.5, None, None, 1e-12, 0.0, "final", "coprecessing", None, integrate_rotor, "averaged",
-                1000)
+    from pnrotor import Options
+    from pnrotor.pn.settings import binary_settings, checked, population_settings
+    o = checked(Options(integrate_rotor=integrate_rotor, max_steps=1000), "final")
     table = _settings_table()
     b = population_settings(o, *table)
     n_valid = 0

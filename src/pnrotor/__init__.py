@@ -13,6 +13,7 @@ _EXPORTS = {
     "Modes": "pnrotor.results",
     "polarizations": "pnrotor.waveform.stream",
     "stream": "pnrotor.waveform.stream",
+    "Options": "pnrotor.options",
 }
 
 

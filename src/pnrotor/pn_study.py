@@ -153,12 +153,10 @@ def lal_call(case):
 def case_settings(case, atol=ATOL_REF):
     """pnrotor's :class:`~pnrotor.pn.settings.Settings` of a case, as ``evolve`` builds them here."""
     from pnrotor.pn import lalsuite_orders
+    from pnrotor.pn.evolve import OPTIONS
     from pnrotor.pn.settings import settings
     m1, m2, c1, c2, f, _ = case
-    return settings(m1, m2, c1, c2, f, f_min=None, f_max=None, approximant="T4", ell_hat=(0.0, 0.0, 1.0),
-                    n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, atol=atol, rtol=0.0, sampling=DT,
-                    rotor="coprecessing", integrate_rotor=False, precession="averaged", max_steps=2_000_000,
-                    **lalsuite_orders("T4"))
+    return settings(m1, m2, c1, c2, f, **{**OPTIONS, "sampling": DT}, atol=atol, **lalsuite_orders("T4"))
 
 
 def rotor_from_states(Y, s):

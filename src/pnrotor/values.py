@@ -15,6 +15,16 @@ TEXT = (str, bytes, bytearray)
 """Refused where a number is expected too (float("30") would be 30.0): numbers only, as ``evolve_many`` takes them."""
 
 
+def float_or_nan(x):
+    """float(x), or NaN for what is not a real number: a bool, text, None, an int beyond any float (10**400)."""
+    if isinstance(x, BOOLS + TEXT):
+        return math.nan
+    try:
+        return float(x)
+    except (TypeError, ValueError, OverflowError):
+        return math.nan
+
+
 def real(x):
     """Whether x is a real number (Python's or numpy's), not a bool."""
     return isinstance(x, numbers.Real) and not isinstance(x, BOOLS)

@@ -45,6 +45,7 @@ import numpy as np
 from pnrotor.batch import TABLE, InterruptFlag, Outcome, backends, check_output, progress_bar
 from pnrotor.batch import Plan as _BatchPlan
 from pnrotor.batch.table import Row, TableFile, parse_row
+from pnrotor.options import TABLE_OPTIONS
 from pnrotor.results.populations import STATE, PopulationTable
 
 __all__ = ["PopulationTable", "Plan", "plan", "run", "unsupported", "compute_chunk", "SHARED", "CHUNK"]
@@ -52,8 +53,7 @@ __all__ = ["PopulationTable", "Plan", "plan", "run", "unsupported", "compute_chu
 CHUNK = 10_000
 """Rows per chunk: one task, one `evolve_many` call per group of options, one part file."""
 
-SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order",
-          "horizon_absorption")
+SHARED = TABLE_OPTIONS
 """The table's columns that `evolve_many` takes as shared by all its binaries: one call per combination."""
 
 FIELDS = STATE + ("termination", "reached", "message", "nsteps", "nfev")
@@ -186,7 +186,7 @@ def _table(rows, parts):
 
 def _shared(params):
     """A row's values of :data:`SHARED`, the approximant by its canonical name (so T4 and TaylorT4 share a call)."""
-    from pnrotor.pn.settings import normalize_approximant
+    from pnrotor.approximants import normalize_approximant
 
     return (normalize_approximant(params["approximant"]),) + tuple(params[key] for key in SHARED[1:])
 

@@ -15,7 +15,7 @@ import functools
 import math
 from pathlib import Path
 
-from pnrotor.parameters import COLUMNS, DEFAULTS, REQUIRED  # noqa: F401 - the table's columns, named here too
+from pnrotor.options import COLUMNS, DEFAULTS, REQUIRED  # noqa: F401 - the table's columns, named here too
 
 
 def parse_vector(text, name):

@@ -41,9 +41,9 @@ from pathlib import Path
 from pnrotor import approximants
 from pnrotor.batch.table import COLUMNS, DEFAULTS, REQUIRED, default_name, parse_sampling, parse_vector
 from pnrotor.cli import UsageError
+from pnrotor.options import OPTION_DEFAULTS, MAX_ORDER, MAX_SO_ORDER, MAX_SS_ORDER, PRECESSION
 
 DEFAULT_FOLDER = "waveforms"
-PRECESSION = ("averaged", "averaged_varpi", "instantaneous")
 ELL_MAX, AMPLITUDE_ORDER = 8, 3.5
 """--ell-max and --amplitude-order when not given: copies of `pnrotor.modes`' defaults, so that parsing the command
 line does not import numba (tests/test_cli_evolve.py checks that they agree)."""
@@ -76,12 +76,14 @@ def add_parser(subparsers):
     model.add_argument("--approximant", help=f"{approximants.names()} (default {DEFAULTS['approximant']}; also "
                        "TaylorT4, SpinTaylorT4, ...)")
     model.add_argument("--pn-order", type=float, metavar="ORDER",
-                       help="PN order of the nonspinning terms, 0 ... 4.5 (default 3.5)")
+                       help=f"PN order of the nonspinning terms, 0 ... {MAX_ORDER:g} (default {OPTION_DEFAULTS['pn_order']:g})")
     model.add_argument("--spin-orbit-order", type=float, metavar="ORDER",
-                       help="PN order of the spin-orbit terms, -1 ... 4 (default min(pn-order, 4); -1: none)")
+                       help=f"PN order of the spin-orbit terms, -1 ... {MAX_SO_ORDER:g} (default min(pn-order, "
+                       f"{MAX_SO_ORDER:g}); -1: none)")
     model.add_argument("--spin-spin-order", type=float, metavar="ORDER",
-                       help="PN order of the spin-spin terms, -1 ... 3 (default min(pn-order, 3); -1: none)")
-    model.add_argument("--precession", choices=PRECESSION, help="spin precession model (default: averaged)")
+                       help=f"PN order of the spin-spin terms, -1 ... {MAX_SS_ORDER:g} (default min(pn-order, "
+                       f"{MAX_SS_ORDER:g}); -1: none)")
+    model.add_argument("--precession", choices=PRECESSION, help=f"spin precession model (default: {OPTION_DEFAULTS['precession']})")
     model.add_argument("--f-min", type=float, metavar="HZ",
                        help="also integrate backward from f_ref down to this GW frequency")
     model.add_argument("--f-max", type=float, metavar="HZ",
@@ -89,7 +91,7 @@ def add_parser(subparsers):
     model.add_argument("--sampling", metavar="S",
                        help="steps (every integrator step, default), final (only the final state), a time step in "
                        "seconds (e.g. 1/4096 or 0.000244) or per_orbit:N (N points per orbit)")
-    model.add_argument("--atol", type=float, help="absolute tolerance of the integrator (default 1e-12; rtol 0)")
+    model.add_argument("--atol", type=float, help=f"absolute tolerance of the integrator (default {OPTION_DEFAULTS['atol']:g}; rtol {OPTION_DEFAULTS['rtol']:g})")
     model.add_argument("--lambda1", type=float, metavar="LAMBDA",
                        help="dimensionless tidal deformability of body 1 (as LALSuite's lambda1; default 0)")
     model.add_argument("--lambda2", type=float, metavar="LAMBDA",

@@ -37,7 +37,6 @@ host turns it into its own exception.
 """
 
 import functools
-import inspect
 import math
 from typing import NamedTuple
 
@@ -90,11 +89,12 @@ class Arguments(NamedTuple):
 
 @functools.cache
 def evolve_options():
-    """The keyword options of :func:`pnrotor.evolve` a host may pass through."""
-    from pnrotor.pn.evolve import evolve
+    """The keyword options of :func:`pnrotor.evolve` a host may pass through: its named keywords and the fields of
+    :class:`pnrotor.Options` (each by name, not ``options`` itself), but those the host sets."""
+    from pnrotor.options import OPTION_DEFAULTS
+    from pnrotor.pn.evolve import OPTIONS
 
-    return frozenset(name for name, p in inspect.signature(evolve).parameters.items()
-                     if p.kind is p.KEYWORD_ONLY and name not in HOST_SET + ("tidal_order",))
+    return frozenset(name for name in (*OPTIONS, *OPTION_DEFAULTS) if name not in HOST_SET + ("tidal_order", "options"))
 
 
 def _lal_order(value, name, highest):
@@ -113,7 +113,7 @@ def arguments(approximant, f_lower, f_ref, amplitude_order=-1, phase_order=-1, s
     """:class:`Arguments` from the SpinTaylor keywords (module docstring); a ValueError naming the first bad one."""
     from pnrotor.pn.evolve import LAL_TIDAL_ORDERS
     from pnrotor.values import real
-    from pnrotor.pn.settings import MAX_SO_ORDER, MAX_SS_ORDER
+    from pnrotor.options import MAX_SO_ORDER, MAX_SS_ORDER
     from pnrotor.waveform.modes import ELL_MAX
 
     unknown = sorted(set(options) - evolve_options() - {"ell_max"})

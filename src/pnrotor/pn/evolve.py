@@ -287,11 +287,8 @@ def termination(status, idx, end, approximant):
 # evolve: the stages in order
 # ---------------------------------------------------------------------------------------------------
 
-def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4", pn_order=3.5,
-           spin_orbit_order=None, spin_spin_order=None, ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0),
-           kappa1=1.0, kappa2=1.0, atol=1e-12, rtol=0.0, sampling="steps", rotor="coprecessing",
-           precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000,
-           lambda1=0.0, lambda2=0.0, tidal_order=None, horizon_absorption=False):
+def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, ell_hat=(0.0, 0.0, 1.0), n_hat=(1.0, 0.0, 0.0),
+           kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0, sampling="steps", options=None, **keywords):
     r"""Evolve a quasi-circular (precessing) compact binary in post-Newtonian theory.
 
     Parameters
@@ -307,74 +304,33 @@ def evolve(m1, m2, chi1, chi2, f_ref, *, f_min=None, f_max=None, approximant="T4
     f_max : float or Quantity, optional
         Stop the forward integration at this GW frequency (> f_ref, and v ≤ 1 there).  None: integrate until
         the PN energy balance terminates the inspiral (or v = 1).
-    approximant : {'T1', 'T4', 'T5'}
-        TaylorT1 (−F/E′ evaluated as a ratio), TaylorT4 (ratio re-expanded, truncated), TaylorT5 (its
-        inverse re-expanded, truncated).  'TaylorT4' and 'SpinTaylorT4' are accepted too.
-    pn_order : float
-        PN order of the nonspinning terms, 0 … 4.5 in steps of 0.5.
-    spin_orbit_order, spin_spin_order : float, optional
-        PN orders of the terms linear and quadratic in the spins (default min(pn_order, 4) and
-        min(pn_order, 3); −1 removes them).  They also select the precession terms (spin-orbit
-        LO/NLO/NNLO at ≥ 1.5/2.5/3.5, spin-spin at ≥ 2/3).  :func:`lalsuite_orders` gives the
-        truncation of LALSuite's SpinTaylorTn.
     ell_hat, n_hat : array_like (3,)
         ℓ̂ and n̂ at t = 0 (unit, orthogonal to 1e-8; made exactly orthonormal).
     kappa1, kappa2 : float
         Spin-induced quadrupole constants (1 for black holes).
-    atol, rtol : float
-        DOP853 tolerances (absolute on every state component; relative).
-    sampling : 'steps' | 'final' | float | Quantity | ('dt', Δt) | ('per_orbit', n)
-        Output at every accepted step, only the final state, uniformly in time with step Δt seconds
-        (Δt > 0; at t = k Δt, t = 0 at f_ref, as LALSuite's grid from fStart), or n points per orbit
-        (n ≥ 1 an integer; Φ = 2πj/n).  Uniform and per-orbit samples come from the dense output.
-    rotor : {'coprecessing', 'orbital'}
-        Which rotor the precessing state holds (see :mod:`pnrotor.pn.rhs`): the co-precessing R_p
-        with R = R_p exp(Φẑ/2) (default, fast) or the full orbital-frame R.
-    precession_phase_shift : bool, optional
-        Apply Φ̇ = v³ − |Ω_ℓ,LO|²/(4v³) (arXiv:1507.00406).  Default: when spin_orbit_order ≥ 3.
-    integrate_rotor : bool
-        Use the precessing state even for nonspinning/aligned binaries.
-    precession : {'averaged', 'averaged_varpi', 'instantaneous'}
-        'averaged' (default; LALSuite's SpinTaylor model with lscorr = 0): orbit-averaged spin
-        precession and Ω_ℓ = −ℓ̂ × (Ṡ₁ + Ṡ₂)/|L| (see :mod:`pnrotor.pn.precession`).
-        'averaged_varpi': the same, but the spin-orbit part of Ω_ℓ is the orbit average ⟨ϖ n̂⟩ of
-        Bohé et al. 2013's ϖ (Eqs. (4.3)–(4.4)); it differs from 'averaged' from NLO on.
-        'instantaneous': Ω = v³ℓ̂ + ϖn̂ with Bohé et al.'s ϖ (spin-orbit) and n̂-dependent spin-spin
-        precession, on the full orbital rotor (implies rotor='orbital', no phase shift; see
-        :mod:`pnrotor.pn.rhs`).
-    max_steps : int
-        Step limit per half.
     lambda1, lambda2 : float
         Dimensionless tidal deformabilities Λᵢ = (2/3) k₂,ᵢ (Rᵢ c²/G mᵢ)⁵ of the bodies (LALSuite's ``lambda1``,
         ``lambda2``; 0 for black holes): the adiabatic quadrupolar tides of Vines, Flanagan & Hinderer 2011 in the
         energy and flux (:mod:`pnrotor.pn.energy`, :mod:`pnrotor.pn.flux`).  κᵢ is not derived from Λᵢ: any
         universal relation between them is the caller's choice.
-    tidal_order : {None, 0, 5, 6}
-        PN order of the tidal terms: 0 none, 5 the leading ones, 6 with their 1PN corrections (None: 6), kept
-        whatever ``pn_order`` is, as LALSuite's tideO.
-    horizon_absorption : bool
-        Follow the flux into black-hole horizons, averaged over the orbit, for any spins (Alvi 2001 at leading order
-        in the tidal coupling, exact in the spins: relative 2.5PN with spins, 4PN without;
-        :func:`pnrotor.pn.flux.horizon_rates`): its energy in the energy balance at first order whatever
-        ``pn_order`` is, its angular momentum in the spins' magnitudes (taken from the orbit: in ℓ̂'s precession
-        too) and its energy in the masses.  Such a run integrates the precessing state, with the masses, even for
-        nonspinning and aligned spins (``inputs['state']`` is 'precessing'; aligned spins stay aligned), and its
-        ``stats`` hold the masses at both ends in M☉ (``m1_final_Msun``, ``m2_final_Msun``, ``m1_initial_Msun``,
-        ``m2_initial_Msun``); the rates and the PN coefficients take the masses at f_ref.  A body with Λᵢ > 0 (a
-        neutron star) has no horizon: it absorbs nothing.  Not with precession='instantaneous'.  LALSuite has no
-        such option.
+    sampling : 'steps' | 'final' | float | Quantity | ('dt', Δt) | ('per_orbit', n)
+        Output at every accepted step, only the final state, uniformly in time with step Δt seconds
+        (Δt > 0; at t = k Δt, t = 0 at f_ref, as LALSuite's grid from fStart), or n points per orbit
+        (n ≥ 1 an integer; Φ = 2πj/n).  Uniform and per-orbit samples come from the dense output.
+    options : Options, optional
+        The model and integration options (:class:`pnrotor.Options`: approximant, PN orders, tolerances, precession
+        model, rotor, tides' order, horizon absorption, …; None: the defaults).
+    **keywords
+        Any field of :class:`pnrotor.Options` by name, replacing that of ``options`` (``pn_order=3``,
+        ``atol=1e-10``, ``**lalsuite_orders('T4')``).
 
     Returns
     -------
     Evolution
     """
     wall0 = time.perf_counter()
-    s = settings(m1, m2, chi1, chi2, f_ref, f_min=f_min, f_max=f_max, approximant=approximant, pn_order=pn_order,
-                 spin_orbit_order=spin_orbit_order, spin_spin_order=spin_spin_order, ell_hat=ell_hat, n_hat=n_hat,
-                 kappa1=kappa1, kappa2=kappa2, atol=atol, rtol=rtol, sampling=sampling, rotor=rotor,
-                 precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
-                 precession=precession, max_steps=max_steps, lambda1=lambda1, lambda2=lambda2, tidal_order=tidal_order,
-                 horizon_absorption=horizon_absorption)
+    s = settings(m1, m2, chi1, chi2, f_ref, f_min=f_min, f_max=f_max, ell_hat=ell_hat, n_hat=n_hat, kappa1=kappa1,
+                 kappa2=kappa2, lambda1=lambda1, lambda2=lambda2, sampling=sampling, options=options, **keywords)
     res_f, res_b, term_f, stats = integrate(s)
     inputs = s.inputs()
     t_out, (v, Phi, x1, x2, R, ellh) = sample(s, res_f, res_b)
@@ -425,18 +381,19 @@ def warn_if_unresolved(atol, rtol, y0):
     return False
 
 
-def check_inputs(m1, m2, chi1, chi2, f_ref, **options):
+def check_inputs(m1, m2, chi1, chi2, f_ref, **keywords):
     """:func:`evolve`'s checks of its arguments (its first stage, :func:`~pnrotor.pn.settings.settings`), without
     running anything compiled: the ValueError ``evolve`` would raise first for them, or None.  The CLI calls it
     before it says it is compiling and starts compiling (a cold cache is no reason to wait for an input error).
     Two checks need more and stay in ``evolve``: whether f_ref is past the end of the inspiral (the compiled set-up)
     and whether a uniform or per-orbit sampling fits in memory (the integrated span)."""
-    settings(m1, m2, chi1, chi2, f_ref, **{**OPTIONS, **options})
+    settings(m1, m2, chi1, chi2, f_ref, **{**OPTIONS, **keywords})
 
 
 OPTIONS = {name: parameter.default for name, parameter in inspect.signature(evolve).parameters.items()
-            if parameter.kind is inspect.Parameter.KEYWORD_ONLY}
-"""evolve's keyword arguments and their defaults."""
+           if parameter.kind is inspect.Parameter.KEYWORD_ONLY}
+"""evolve's named keyword arguments and their defaults (those of the binary, its sampling and ``options``; the
+fields of :class:`pnrotor.Options` are its other keywords)."""
 
 
 _STATS_KEYS = [(key, f"{key}_forward", f"{key}_backward") for key in ("nfev", "nsteps", "naccepted", "nrejected")]

@@ -1,13 +1,13 @@
 """``evolve_many``'s inputs checked and converted: arrays per binary (one value for all, or one each), the number of
 binaries they agree on, the target frequencies, and a pandas DataFrame with a batch table's columns
-(:mod:`pnrotor.parameters`).  A ValueError names the input (and row) that does not fit."""
+(:mod:`pnrotor.options`).  A ValueError names the input (and row) that does not fit."""
 
 import sys
 
 import numpy as np
 
 from .. import values
-from ..parameters import COLUMNS, DEFAULTS, REQUIRED
+from ..options import COLUMNS, DEFAULTS, REQUIRED, TABLE_OPTIONS
 
 
 def per_binary(x, n, name, shape=(), unit=None):
@@ -99,15 +99,10 @@ def is_frame(x):
     return pandas is not None and isinstance(x, pandas.DataFrame)
 
 
-FRAME_SHARED = ("approximant", "pn_order", "spin_orbit_order", "spin_spin_order", "precession", "atol", "tidal_order",
-                "horizon_absorption")
-"""The columns of a batch table that a DataFrame may hold for the options evolve_many shares (one value each)."""
-
-
 def from_frame(frame, given, f_end, frequencies, shared, lambdas):
     """evolve_many's per-binary inputs from a DataFrame with a batch table's columns (evolve_many's docstring) →
     (m1, m2, chi1, chi2, f_ref, f_end, backward: where the target is an f_min, or None, lambda1, lambda2: the
-    columns, or where absent the values ``lambdas`` gives); the options its columns hold go into ``shared``.  A
+    columns, or where absent the values ``lambdas`` gives); the options its columns hold go into ``shared`` (the fields of the call's :class:`pnrotor.Options`, by name).  A
     ValueError names the column (and row) that does not fit."""
     from pandas.api.types import is_bool_dtype, is_numeric_dtype
 
@@ -156,7 +151,7 @@ def from_frame(frame, given, f_end, frequencies, shared, lambdas):
                              "both f_min and f_max: evolve_many gives one state per row, at f_max (forward), at f_min "
                              "(backward) or at the end of the inspiral")
         f_end, backward = np.where(has_max, f_max, f_min), has_min
-    for name in FRAME_SHARED + ("sampling",):
+    for name in TABLE_OPTIONS + ("sampling",):
         values = frame[name].dropna().unique() if name in frame.columns else ()
         if len(values) > 1:
             raise ValueError(f"column {name} of the DataFrame holds several values ({', '.join(map(str, values[:5]))}"

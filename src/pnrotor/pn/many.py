@@ -35,6 +35,7 @@ half runs within the time bound of its farthest target, which is longer than a n
 Newtonian time, :func:`~pnrotor.pn.evolve.half`); a single run that hit its own bound would end sooner.
 """
 
+import dataclasses
 import gc
 import math
 import time
@@ -50,10 +51,11 @@ from ..ode.dop853 import core as dop853_core
 from ..ode.events import crossed, locate_root
 from ..ode.result import STATUS_EVENT, contd8
 from . import initial as _ini
+from ..options import Options, options_of
 from .evolve import (CONTROLLER_ARGS, TERMINATION_MESSAGES, check_start, ended_at, tolerances, build_rows, end_name,
                      half, kmax_of, population_parts, termination, warn_if_unresolved)
 from .sampling import fill_history, output_mode
-from .settings import Binaries, binary_settings, options, population_settings, target_v
+from .settings import Binaries, binary_settings, checked, population_settings, target_v
 from .inputs import from_frame, is_frame, per_binary, population_size, target_table
 from .layout import EV_V_END, N_EVENTS, P_VEND
 from pnrotor.results.populations import INSPIRAL_ENDS, STATE, Population, spin_angles
@@ -223,10 +225,7 @@ def _refused_targets(f, m1, m2, f_ref):
 
 
 def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, frequencies=None, ell_hat=(0.0, 0.0, 1.0),
-                n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, approximant="T4", pn_order=3.5,
-                spin_orbit_order=None, spin_spin_order=None, atol=1e-12, rtol=0.0, rotor="coprecessing",
-                precession_phase_shift=None, integrate_rotor=False, precession="averaged", max_steps=2_000_000,
-                lambda1=0.0, lambda2=0.0, tidal_order=None, horizon_absorption=False):
+                n_hat=(1.0, 0.0, 0.0), kappa1=1.0, kappa2=1.0, lambda1=0.0, lambda2=0.0, options=None, **keywords):
     r"""Evolve N binaries from f_ref → :class:`Population` of their states at the end of the inspiral, at
     f_end or at a list of frequencies (module docstring), NaN where a binary did not reach its target (its
     ``reached`` False, the state where it stopped in ``stopped_at``).
@@ -262,11 +261,12 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
         Spin-induced quadrupole constants.
     lambda1, lambda2 : array_like (N,) or scalar
         Dimensionless tidal deformabilities Λᵢ (0 for black holes).
-    approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol
-        As for :func:`~pnrotor.pn.evolve.evolve`, shared by all binaries.
-    rotor, precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order, horizon_absorption
-        The same (with ``horizon_absorption`` every binary is on the precessing state, its spins at the state's
-        frequency changed by what the horizons absorbed; the masses it leaves are not kept).
+    options : Options, optional
+        The model and integration options (:class:`pnrotor.Options`), shared by all binaries (with
+        ``horizon_absorption`` every binary is on the precessing state, its spins at the state's frequency changed by
+        what the horizons absorbed; the masses it leaves are not kept).
+    **keywords
+        Any field of :class:`pnrotor.Options` by name, replacing that of ``options``.
 
     Notes
     -----
@@ -275,16 +275,14 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
     options or array shapes raise a ValueError; an invalid binary does not (module docstring).
     """
     wall0 = time.perf_counter()
-    shared = dict(approximant=approximant, pn_order=pn_order, spin_orbit_order=spin_orbit_order,
-                  spin_spin_order=spin_spin_order, atol=atol, rtol=rtol, sampling="final", rotor=rotor,
-                  precession_phase_shift=precession_phase_shift, integrate_rotor=integrate_rotor,
-                  precession=precession, max_steps=max_steps, tidal_order=tidal_order,
-                  horizon_absorption=horizon_absorption)
+    given = options_of(options, keywords, "evolve_many")
     backward = None   # a binary's target behind f_ref (f_min): by default where it lies below f_ref
     if is_frame(m1):
+        shared = dataclasses.asdict(given)
         m1, m2, chi1, chi2, f_ref, f_end, backward, lambda1, lambda2 = from_frame(
             m1, dict(m2=m2, chi1=chi1, chi2=chi2, f_ref=f_ref), f_end, frequencies, shared,
             dict(lambda1=lambda1, lambda2=lambda2))
+        given = Options(**shared)
     else:
         missing = [name for name, x in (("m2", m2), ("chi1", chi1), ("chi2", chi2), ("f_ref", f_ref)) if x is None]
         if missing:
@@ -302,7 +300,7 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
                        ((chi1, "chi1"), (chi2, "chi2"), (ell_hat, "ell_hat"), (n_hat, "n_hat")))
     # the shared options fail for every binary alike: check them once (a binary of the table could itself be
     # invalid, which must not raise); a reference binary carries them to population_parts
-    opts = options(**shared)
+    opts = checked(given, "final")
     reference = binary_settings(opts, 10.0, 10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 20.0, None, None,
                                 (0.0, 0.0, 1.0), (1.0, 0.0, 0.0), 1.0, 1.0)
 
@@ -314,7 +312,7 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
     out = Population(**state, termination=np.full(nr, "invalid", dtype=object), reached=np.zeros(nr, dtype=bool),
                      message=np.full(nr, "", dtype=object), nsteps=np.zeros(nr, dtype=np.int64),
                      nfev=np.zeros(nr, dtype=np.int64), stopped_at=state,   # the states' own arrays until the end
-                     inputs={**{k: v for k, v in shared.items() if k != "sampling"},
+                     inputs={**dataclasses.asdict(given),
                              **dict(zip(PER_BINARY, (m1a, m2a, c1, c2, fref, ell, nh, k1, k2, l1, l2))),
                              ("frequencies_Hz" if listed else "f_end_Hz"): targets if listed else targets[:, 0]})
     ends, M_sec = np.full(nr, None, dtype=object), np.full(nr, np.nan)
@@ -437,8 +435,8 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
                                                           forward)
                     if not forward:   # a copy with v_end = v_min
                         Ph[sel] = p
-                integrating += _integrate_group(rhs, events, mode[aligned], float(shared["atol"]),
-                                                float(shared["rtol"]), int(shared["max_steps"]),
+                integrating += _integrate_group(rhs, events, mode[aligned], float(opts.atol), float(opts.rtol),
+                                                opts.max_steps,
                                                 Y0[hq], Ph, t_end, directions, bg.R0[hq], bg.ell_hat[hq],
                                                 bg.chi1[hq], bg.chi2[hq], hrow, near_v, near_r, out, counts)
     named = {}    # (status, event, end) → (termination, reached): a few kinds among many rows

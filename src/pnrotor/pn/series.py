@@ -74,9 +74,6 @@ PROD[B_A2, B_A1] = B_A1A2
 PROD[B_A2, B_A2] = B_A2A2
 del _b
 
-MAX_ORDER = 4.5  # the highest point-particle order (k = 9)
-
-
 def shape_of(x):
     """np.shape(x), without making an array of a float or int (np.shape: ~1.4 µs, seven times in one binary's
     set-up)."""

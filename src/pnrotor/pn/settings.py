@@ -5,8 +5,8 @@ Quantities, GW frequencies in Hz, spins, frame, model options, sampling) into on
 units (G = c = M = 1, :mod:`pnrotor.pn.initial`): v at f_ref, f_min and f_max, the initial rotor R₀
 (x̂, ŷ, ẑ) → (n̂, λ̂, ℓ̂), the mass ratio, the PN orders with their defaults, and the spin content
 (nonspinning, aligned or precessing) that decides which right-hand side is compiled in.  It does so in
-two parts: :func:`options` (the model and integration options, which the binaries of ``evolve_many`` share
-and it checks once) and :func:`binary_settings` (the binary); :func:`population_settings` does the second for
+two parts: :func:`checked` (the model and integration options, a :class:`pnrotor.Options`, and the sampling, which
+the binaries of ``evolve_many`` share and it checks once) and :func:`binary_settings` (the binary); :func:`population_settings` does the second for
 arrays of binaries at once (bitwise the same numbers), leaving the binaries it does not pass to
 binary_settings.  Every bad input is a ``ValueError`` naming the parameter and its allowed range.  No numba
 here: the later stages (:mod:`pnrotor.pn.evolve`, :mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
@@ -20,19 +20,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import values
-from ..approximants import normalize_approximant
+from ..options import options_of
 from . import initial as _ini
-from .series import MAX_ORDER
 
-MAX_SO_ORDER = 4.0
-MAX_SS_ORDER = 3.0
-PRECESSION = ("averaged", "averaged_varpi", "instantaneous")
-ROTORS = ("coprecessing", "orbital")
 MAX_MASS_RATIO = 1e6
 """Largest m1/m2 or m2/m1: runs stay meaningful to ~1e4 (a precessing q = 1e6 binary from v = 0.2 already
 exhausts max_steps), and beyond ~1e150 the mass fractions' squares underflow."""
-MAX_STEPS = 2**63 - 1
-"""Largest max_steps: the integrator counts its steps in int64."""
 V_MIN = 1e-3
 """Smallest v at f_ref or f_min: from v ≈ 0.01 down the PN inspiral spans ≳ 10⁹ orbits and the integration
 ends at step_underflow or max_steps; far lower (v⁸ < 1e-308) it would divide by zero."""
@@ -62,21 +55,21 @@ class Settings:
     kappa2: float
     lambda1: float
     lambda2: float
-    approximant: str    # from here to max_steps: the fields of Options, in its order
+    approximant: str    # from here to sampling_value: the fields of Checked, in its order
     pn_order: float
     spin_orbit_order: float
     spin_spin_order: float
-    tidal_order: float
     atol: float
     rtol: float
-    sampling: str
-    sampling_value: float
     rotor: str
     precession_phase_shift: bool
     integrate_rotor: bool
     precession: str
     max_steps: int
+    tidal_order: float
     horizon_absorption: bool
+    sampling: str
+    sampling_value: float
     M_sec: float
     X1: float
     nu: float
@@ -114,82 +107,46 @@ class Settings:
         }
 
 
-class Options(NamedTuple):
-    """The model and integration options of a run, checked (:func:`options`): what the binaries of
-    ``evolve_many`` share.  Fields as in :class:`Settings` (a NamedTuple: a frozen dataclass cost ~2 µs more per
-    run to build)."""
+class Checked(NamedTuple):
+    """A run's options as it uses them: :attr:`pnrotor.Options.resolved` and the parsed sampling (mode, value) — what
+    the binaries of ``evolve_many`` share.  Fields as in :class:`Settings` (a NamedTuple: a frozen dataclass cost ~2 µs
+    more per run to build)."""
 
     approximant: str
     pn_order: float
     spin_orbit_order: float
     spin_spin_order: float
-    tidal_order: float
     atol: float
     rtol: float
-    sampling: str
-    sampling_value: float
     rotor: str
     precession_phase_shift: bool
     integrate_rotor: bool
     precession: str
     max_steps: int
-    horizon_absorption: bool = False
+    tidal_order: float
+    horizon_absorption: bool
+    sampling: str
+    sampling_value: float
 
 
-def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, approximant, pn_order, spin_orbit_order,
-             spin_spin_order, ell_hat, n_hat, kappa1, kappa2, atol, rtol, sampling, rotor, precession_phase_shift,
-             integrate_rotor, precession, max_steps, lambda1=0.0, lambda2=0.0, tidal_order=None,
-             horizon_absorption=False):
+def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1, lambda2, sampling,
+             options=None, caller="evolve", **keywords):
     """Check and convert :func:`pnrotor.pn.evolve.evolve`'s arguments (its docstring has their meaning and
-    defaults) → :class:`Settings`; a ``ValueError`` naming the first bad one (the options first)."""
-    o = options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, sampling, rotor,
-                precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order, horizon_absorption)
+    defaults; ``options`` and ``keywords`` as :func:`pnrotor.options.options_of`'s for ``caller``) →
+    :class:`Settings`; a ``ValueError`` naming the first bad one (the options first)."""
+    o = checked(options_of(options, keywords, caller), sampling)
     return binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1,
                            lambda2)
 
 
-def options(approximant, pn_order, spin_orbit_order, spin_spin_order, atol, rtol, sampling, rotor,
-            precession_phase_shift, integrate_rotor, precession, max_steps, tidal_order=None, horizon_absorption=False):
-    """:class:`Options` from ``evolve``'s keywords of the same names; a ``ValueError`` naming the first bad one."""
-    approximant = normalize_approximant(approximant)
-    pn_order = _order(pn_order, "pn_order", 0.0, MAX_ORDER)
-    so_order = (min(pn_order, MAX_SO_ORDER) if spin_orbit_order is None
-                else _order(spin_orbit_order, "spin_orbit_order", -1.0, MAX_SO_ORDER))
-    ss_order = (min(pn_order, MAX_SS_ORDER) if spin_spin_order is None
-                else _order(spin_spin_order, "spin_spin_order", -1.0, MAX_SS_ORDER))
-    tidal_order = check_tidal_order(tidal_order)
-    if rotor not in ROTORS:
-        raise ValueError(f"rotor must be 'coprecessing' or 'orbital', got {rotor!r}")
-    mode, sval = parse_sampling(sampling)
-    if not (values.real(atol) and values.real(rtol) and values.finite(atol) and values.finite(rtol) and atol > 0.0
-            and rtol >= 0.0):
-        raise ValueError(f"atol must be > 0 and rtol >= 0, both finite numbers; got atol = {atol!r}, rtol = {rtol!r}")
-    if not (values.integer(max_steps) and 1 <= max_steps <= MAX_STEPS):
-        raise ValueError(f"max_steps must be an integer from 1 to {MAX_STEPS}, got {max_steps!r}")
-    if not isinstance(integrate_rotor, values.BOOLS):
-        raise ValueError(f"integrate_rotor must be True or False, got {integrate_rotor!r}")
-    if precession_phase_shift is not None and not isinstance(precession_phase_shift, values.BOOLS):
-        raise ValueError(f"precession_phase_shift must be None (on at spin-orbit order >= 3), True or False, got "
-                         f"{precession_phase_shift!r}")
-    if precession not in PRECESSION:
-        raise ValueError(f"precession must be 'averaged', 'averaged_varpi' or 'instantaneous', got {precession!r}")
-    if precession == "instantaneous":
-        rotor = "orbital"
-        precession_phase_shift = False
-    if precession_phase_shift is None:
-        precession_phase_shift = so_order >= 3.0
-    if not isinstance(horizon_absorption, values.BOOLS):
-        raise ValueError(f"horizon_absorption must be True or False, got {horizon_absorption!r}")
-    if horizon_absorption and precession == "instantaneous":
-        raise ValueError("horizon_absorption needs the orbit-averaged precession ('averaged' or 'averaged_varpi'): its "
-                         "flux into the horizons is averaged over the orbit; got precession='instantaneous'")
-    return Options(approximant, pn_order, so_order, ss_order, tidal_order, atol, rtol, mode, sval, rotor,
-                   precession_phase_shift, integrate_rotor, precession, int(max_steps), bool(horizon_absorption))
+def checked(options, sampling):
+    """:class:`Checked` of a :class:`pnrotor.Options` and a ``sampling`` (a ValueError listing its forms)."""
+    return Checked(*options.resolved, *parse_sampling(sampling))
 
 
 def binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1=0.0,
                     lambda2=0.0):
-    """:class:`Settings` of one binary run with :class:`Options` ``o`` (the rest of :func:`settings`'s checks,
+    """:class:`Settings` of one binary run with :class:`Checked` ``o`` (the rest of :func:`settings`'s checks,
     those of the binary; ``evolve_many`` checks the options once and calls this per binary)."""
     m1, m2, f_ref, f_min, f_max = masses_and_frequencies(m1, m2, f_ref, f_min, f_max)
     c1 = _ini.spin_vector(chi1, "chi1")
@@ -234,7 +191,7 @@ class Binaries(NamedTuple):
 
 def population_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1=0.0,
                         lambda2=0.0):
-    """:func:`binary_settings` of n binaries with :class:`Options` ``o`` over float64 arrays ((n,), (n, 3); NaN in
+    """:func:`binary_settings` of n binaries with :class:`Checked` ``o`` over float64 arrays ((n,), (n, 3); NaN in
     f_min and f_max for none) → :class:`Binaries`.  Where a binary passes every check of binary_settings, its row is
     valid and holds bitwise that function's numbers (the same operations in the same order, elementwise; pow as
     libm's, :func:`~pnrotor.pn.initial.elementwise`); every other row is left invalid for binary_settings to
@@ -305,27 +262,13 @@ def _frame_rotor(ell_n):
     return _ini.frame_rotor(ell_n[:3], ell_n[3:])
 
 
-TIDAL_ORDERS = (0.0, 5.0, 6.0)
-"""The tidal orders: none, 5PN (leading), 6PN (with the 1PN tidal terms; the default)."""
-
-
-def check_tidal_order(x):
-    """A tidal order: 0, 5 or 6 (None: 6)."""
-    if x is None:
-        return 6.0
-    value = _float_or_nan(x)
-    if value not in TIDAL_ORDERS:
-        raise ValueError(f"tidal_order must be 0 (no tides), 5 or 6 (PN orders of the tidal terms; None: 6), got {x!r}")
-    return value
-
-
 _KAPPA = "1 for a black hole, ~2-20 for neutron stars"
 _LAMBDA = "the dimensionless tidal deformability: 0 for a black hole, ~10-5000 for neutron stars"
 
 
 def _nonnegative(value, name, meaning):
     """A finite number ≥ 0: κᵢ (``meaning`` :data:`_KAPPA`) or Λᵢ (:data:`_LAMBDA`)."""
-    x = _float_or_nan(value)
+    x = values.float_or_nan(value)
     if not (math.isfinite(x) and x >= 0.0):
         raise ValueError(f"{name} must be a finite number >= 0 ({meaning}), got {value!r}")
     return x
@@ -398,26 +341,6 @@ def _spin_content(c1, c2, ell):
     else:
         content = "nonspinning"   # (zero spins have no in-plane part)
     return content, a1 * ell, a2 * ell
-
-
-def _order(x, name, lo, hi):
-    """A PN order: a multiple of 0.5 in [lo, hi]."""
-    if x is None:
-        raise ValueError(f"{name} is required")
-    value = _float_or_nan(x)
-    if not (lo <= value <= hi) or abs(2 * value - round(2 * value)) > 1e-12:
-        raise ValueError(f"{name} must be a multiple of 0.5 in [{lo}, {hi}], got {x!r}")
-    return value
-
-
-def _float_or_nan(x):
-    """float(x), or NaN for what is not a real number: a bool, text, None, an int beyond any float (10**400)."""
-    if isinstance(x, values.BOOLS + values.TEXT):
-        return math.nan
-    try:
-        return float(x)
-    except (TypeError, ValueError, OverflowError):
-        return math.nan
 
 
 MAX_PER_ORBIT = 2 ** 53

@@ -60,7 +60,7 @@ def tides_of(inputs, tidal_order):
     """``tides`` of :func:`pnrotor.waveform.amplitudes.modes_in_frame` for a run's inputs: (Λ₁, Λ₂, the largest
     power of v of a tidal term), to ``tidal_order`` (None: the run's own; 0, 5 or 6), none without deformabilities
     (or in a file written before them)."""
-    from pnrotor.pn.settings import check_tidal_order
+    from pnrotor.options import check_tidal_order
 
     order = inputs.get("tidal_order", 0.0) if tidal_order is None else check_tidal_order(tidal_order)
     lambdas = (float(inputs.get("lambda1", 0.0)), float(inputs.get("lambda2", 0.0)))

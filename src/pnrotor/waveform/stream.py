@@ -71,18 +71,17 @@ AMPLITUDE_ORDER = 3.5
 """The default amplitude order, as :func:`pnrotor.modes`'."""
 
 
-def stream(m1, m2, chi1, chi2, f_ref, *, delta_t, f_min=None, f_max=None, **options):
-    """The binary of ``pnrotor.evolve(m1, m2, chi1, chi2, f_ref, f_min=…, f_max=…, sampling=delta_t, **options)``
+def stream(m1, m2, chi1, chi2, f_ref, *, delta_t, f_min=None, f_max=None, **keywords):
+    """The binary of ``pnrotor.evolve(m1, m2, chi1, chi2, f_ref, f_min=…, f_max=…, sampling=delta_t, **keywords)``
     integrated (its stages 1–3), its samples t = k Δt (``delta_t`` in seconds, or an astropy time) not computed
-    yet: a :class:`Stream`.  ``options`` are evolve's other keywords (approximant, orders, frame, tolerances, …)."""
+    yet: a :class:`Stream`.  ``keywords`` are evolve's other keywords (the frame, κᵢ, Λᵢ, ``options`` and the fields
+    of :class:`pnrotor.Options`: approximant, orders, tolerances, …)."""
     wall0 = time.perf_counter()
-    unknown = sorted(name for name in options if name not in OPTIONS or name == "sampling")
-    if unknown:
-        raise TypeError(f"unexpected keyword argument {unknown[0]!r} (the options are pnrotor.evolve's, with "
-                        f"delta_t for its sampling)")
+    if "sampling" in keywords:
+        raise TypeError("stream() got an unexpected keyword argument 'sampling' (delta_t is its sampling)")
     delta_t = _ini.seconds(delta_t, "delta_t")
-    s = settings(m1, m2, chi1, chi2, f_ref, **{**OPTIONS, **options, "f_min": f_min, "f_max": f_max,
-                                                "sampling": delta_t})
+    s = settings(m1, m2, chi1, chi2, f_ref, **{**OPTIONS, **keywords, "f_min": f_min, "f_max": f_max,
+                                                "sampling": delta_t}, caller="stream")
     res_f, res_b, termination, stats = integrate(s)
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Stream(s, res_f, res_b, termination, stats)
