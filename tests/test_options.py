@@ -12,7 +12,7 @@ import pytest
 
 import pnrotor
 from pnrotor import Options, options as options_module
-from pnrotor.pn.evolve import OPTIONS
+from pnrotor.pn.evolve import OPTIONS, check_inputs
 
 BINARY = (30.0, 10.0, (0.5, 0.1, 0.3), (0.0, 0.4, -0.2), 20.0)
 CHANGED = dict(approximant="TaylorT5", pn_order=3, spin_orbit_order=2.5, atol=1e-10, max_steps=500_000,
@@ -123,14 +123,45 @@ def test_options_and_the_cli_help_load_no_numba():
     assert done.returncode == 0 and done.stdout == "2.0\n", done.stderr
 
 
-def test_keywords_made_once_stay_apart_by_type():
-    """The Options of repeated keywords are made once (options_of's cache), keyed by type too: True then 1 still
-    refuses 1; 3 and 3.0 keep what was given; an unhashable value is checked without the cache."""
+def test_keywords_made_once_stay_apart_by_type_and_sign():
+    """The Options of repeated keywords are made once (options_of's cache), keyed by type and repr too: True then 1
+    still refuses 1; 3 and 3.0, 0.0 and -0.0 keep what was given, whatever came before; an unhashable value is checked
+    without the cache."""
     of = options_module.options_of
     assert of(None, {"integrate_rotor": True}, "evolve") is of(None, {"integrate_rotor": True}, "evolve")
+    for first, second in ((-0.0, 0.0), (0.0, -0.0)):
+        of(None, {"rtol": first}, "evolve")
+        assert str(of(None, {"rtol": second}, "evolve").rtol) == str(second)
     with pytest.raises(ValueError, match="integrate_rotor must be True or False, got 1"):
         of(None, {"integrate_rotor": 1}, "evolve")
     assert type(of(None, {"pn_order": 3.0}, "evolve").pn_order) is float
     assert type(of(None, {"pn_order": 3}, "evolve").pn_order) is int
     with pytest.raises(ValueError, match="pn_order must be a multiple of 0.5"):
         of(None, {"pn_order": [3.0]}, "evolve")
+
+
+def test_a_registry_change_reaches_options_made_before():
+    """An approximant name resolved by an Options made earlier is resolved anew after the registry changes."""
+    from pnrotor import approximants
+    from pnrotor.pn import vdot
+    of = options_module.options_of
+    approximants.register(approximants.Approximant("TX", vdot.taylor_t4, "T4 under another name", aliases=("Foo",)))
+    try:
+        assert of(None, {"approximant": "foo"}, "evolve").resolved[0] == "TX"
+    finally:
+        approximants.unregister("TX")
+    with pytest.raises(ValueError, match="approximant must be one of"):
+        of(None, {"approximant": "foo"}, "evolve")
+    with pytest.raises(ValueError, match="approximant must be one of"):
+        check_inputs(*BINARY, approximant="foo")
+
+
+def test_the_internal_caller_name_is_no_keyword():
+    """evolve, stream and evolve_many name themselves in errors; that name is not a keyword a user can set, and a
+    missing binary input is said before a bad option, as before Options."""
+    with pytest.raises(TypeError, match=r"evolve\(\) got an unexpected keyword argument 'caller'"):
+        pnrotor.evolve(*BINARY, caller="x")
+    with pytest.raises(TypeError, match=r"stream\(\) got an unexpected keyword argument 'caller'"):
+        pnrotor.stream(*BINARY, delta_t=1 / 1024, caller="x")
+    with pytest.raises(TypeError, match="evolve_many\\(\\) missing m2"):
+        pnrotor.evolve_many(30.0, pn_order=9)

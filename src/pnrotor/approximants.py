@@ -8,7 +8,7 @@ by its v̇ function (:mod:`pnrotor.pn.vdot`):
     TaylorT4: N = [F̂/Ê′] re-expanded and truncated, D = 1;
     TaylorT5: N = 1, D = [Ê′/F̂] re-expanded and truncated (the inverse, Ajith 2011, arXiv:1107.1267).
 
-Each is an :class:`Approximant` in :data:`REGISTRY`.  Settings (:func:`normalize_approximant`),
+Each is an :class:`Approximant` in :data:`REGISTRY`.  :class:`pnrotor.Options` (:func:`normalize_approximant`),
 :func:`pnrotor.pn.evolve.lalsuite_orders`, the terminations, the v̇ series (:mod:`pnrotor.pn.vdot`), the CLI and the
 HDF5 schema read it; the right-hand sides and events never see the approximant (they evaluate N and D stored in the
 parameter vector, :mod:`pnrotor.pn.rhs`).  Imports nothing (no numba), so that the CLI and the HDF5 schema can read it
@@ -52,6 +52,10 @@ REGISTRY = {}
 _NAMES = {}
 """Every accepted name, upper case and stripped → the approximant's name."""
 
+generation = 0
+"""How many times :data:`REGISTRY` has changed: what was made from it (`pnrotor.Options`) is made anew after a
+change."""
+
 
 def _key(name):
     return str(name).strip().upper()
@@ -67,16 +71,20 @@ def register(approximant):
     for name in names:
         if _key(name) in _NAMES:
             raise ValueError(f"approximant name {name!r} is taken by {_NAMES[_key(name)]!r}")
+    global generation
     REGISTRY[a.name] = a
     _NAMES.update({_key(name): a.name for name in names})
+    generation += 1
     return a
 
 
 def unregister(name):
     """Remove the approximant ``name`` (and its aliases) from :data:`REGISTRY`."""
+    global generation
     a = REGISTRY.pop(name)
     for alias in (a.name,) + tuple(a.aliases):
         del _NAMES[_key(alias)]
+    generation += 1
 
 
 def normalize_approximant(approximant):

@@ -13,6 +13,7 @@ parser loads neither numpy nor numba).
 import dataclasses
 import functools
 
+from pnrotor import approximants
 from pnrotor.approximants import normalize_approximant
 
 __all__ = ["Options", "options_of", "OPTION_DEFAULTS", "REQUIRED", "DEFAULTS", "COLUMNS", "TABLE_OPTIONS"]
@@ -116,9 +117,10 @@ def options_of(options, keywords, caller):
         raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r}")
     if options is None:
         if not keywords:
-            return _default()
+            return _made(approximants.generation, ())
         try:
-            return _made(tuple((name, type(value), value) for name, value in keywords.items()))
+            return _made(approximants.generation,
+                         tuple((name, type(value), value, repr(value)) for name, value in keywords.items()))
         except TypeError:   # a value that cannot be a key (an array, an astropy Quantity): checked anew
             return Options(**keywords)
     if not isinstance(options, Options):
@@ -126,17 +128,12 @@ def options_of(options, keywords, caller):
     return dataclasses.replace(options, **keywords) if keywords else options
 
 
-@functools.cache
-def _default():
-    """Options(): what a call given no options uses."""
-    return Options()
-
-
 @functools.lru_cache(maxsize=64)
-def _made(items):
-    """Options of the keywords (name, type, value) ``items``, made once for calls that repeat them (making one costs
-    ~5 µs, a tenth of a short run's Python work); the type is in the key, so 1 and True, or 3 and 3.0, stay apart."""
-    return Options(**{name: value for name, _, value in items})
+def _made(generation, items):
+    """Options of the keywords (name, type, value, repr) ``items``, made once for calls that repeat them (making one
+    costs ~5 µs, a tenth of a short run's Python work) while the approximants' registry is at ``generation``.  The type
+    and the repr are in the key, so that 1 and True, 3 and 3.0, 0.0 and -0.0 stay apart."""
+    return Options(**{name: value for name, _, value, _ in items})
 
 
 def _resolve(o):

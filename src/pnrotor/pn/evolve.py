@@ -156,7 +156,7 @@ def _start(s):
 
 
 def build_rows(o, b, parts, rows):
-    """What :func:`build_system` builds and checks, for binaries that share :class:`~pnrotor.pn.settings.Options`
+    """What :func:`build_system` builds and checks, for binaries that share :class:`~pnrotor.pn.settings.Checked`
     ``o`` and their right-hand side (all on the [v, Φ] system, ``use_aligned``, or none), in one compiled call
     (:func:`pnrotor.pn.system.start_rows`: ``evolve_many``): b holds their rows of
     :class:`~pnrotor.pn.settings.Binaries`, binary i from row rows[i] of the spin-independent ``parts``

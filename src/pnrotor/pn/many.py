@@ -51,7 +51,7 @@ from ..ode.dop853 import core as dop853_core
 from ..ode.events import crossed, locate_root
 from ..ode.result import STATUS_EVENT, contd8
 from . import initial as _ini
-from ..options import Options, options_of
+from ..options import OPTION_DEFAULTS, TABLE_OPTIONS, Options, options_of
 from .evolve import (CONTROLLER_ARGS, TERMINATION_MESSAGES, check_start, ended_at, tolerances, build_rows, end_name,
                      half, kmax_of, population_parts, termination, warn_if_unresolved)
 from .sampling import fill_history, output_mode
@@ -233,7 +233,7 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
     Parameters
     ----------
     m1 : array_like (N,) or scalar, or a pandas DataFrame
-        A DataFrame is a table of binaries with the columns of a batch table (`pnrotor.parameters.COLUMNS`):
+        A DataFrame is a table of binaries with the columns of a batch table (`pnrotor.options.COLUMNS`):
         ``m1``, ``m2``, ``chi1``, ``chi2`` (cells of three numbers, or ``"x,y,z"`` text), ``f_ref`` per binary;
         optional ``f_max`` (the state there, forward) or ``f_min`` (backward), at most one per row (NaN: none; with
         neither, the end of the inspiral), instead of f_end; optional columns of the shared options
@@ -275,14 +275,14 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
     options or array shapes raise a ValueError; an invalid binary does not (module docstring).
     """
     wall0 = time.perf_counter()
-    given = options_of(options, keywords, "evolve_many")
     backward = None   # a binary's target behind f_ref (f_min): by default where it lies below f_ref
     if is_frame(m1):
-        shared = dataclasses.asdict(given)
+        frame = m1
+        called = {**OPTION_DEFAULTS, **(dataclasses.asdict(options) if isinstance(options, Options) else {}), **keywords}
         m1, m2, chi1, chi2, f_ref, f_end, backward, lambda1, lambda2 = from_frame(
-            m1, dict(m2=m2, chi1=chi1, chi2=chi2, f_ref=f_ref), f_end, frequencies, shared,
+            frame, dict(m2=m2, chi1=chi1, chi2=chi2, f_ref=f_ref), f_end, frequencies, called,
             dict(lambda1=lambda1, lambda2=lambda2))
-        given = Options(**shared)
+        keywords = {**keywords, **{name: called[name] for name in TABLE_OPTIONS if name in frame.columns}}
     else:
         missing = [name for name, x in (("m2", m2), ("chi1", chi1), ("chi2", chi2), ("f_ref", f_ref)) if x is None]
         if missing:
@@ -300,6 +300,7 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
                        ((chi1, "chi1"), (chi2, "chi2"), (ell_hat, "ell_hat"), (n_hat, "n_hat")))
     # the shared options fail for every binary alike: check them once (a binary of the table could itself be
     # invalid, which must not raise); a reference binary carries them to population_parts
+    given = options_of(options, keywords, "evolve_many")
     opts = checked(given, "final")
     reference = binary_settings(opts, 10.0, 10.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 20.0, None, None,
                                 (0.0, 0.0, 1.0), (1.0, 0.0, 0.0), 1.0, 1.0)

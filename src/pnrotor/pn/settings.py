@@ -129,11 +129,12 @@ class Checked(NamedTuple):
     sampling_value: float
 
 
-def settings(m1, m2, chi1, chi2, f_ref, *, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1, lambda2, sampling,
-             options=None, caller="evolve", **keywords):
+def settings(m1, m2, chi1, chi2, f_ref, caller="evolve", /, *, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1,
+             lambda2, sampling, options=None, **keywords):
     """Check and convert :func:`pnrotor.pn.evolve.evolve`'s arguments (its docstring has their meaning and
-    defaults; ``options`` and ``keywords`` as :func:`pnrotor.options.options_of`'s for ``caller``) →
-    :class:`Settings`; a ``ValueError`` naming the first bad one (the options first)."""
+    defaults; ``options`` and ``keywords`` as :func:`pnrotor.options.options_of`'s for ``caller``, the name of the
+    function called, for errors) → :class:`Settings`; a ``ValueError`` naming the first bad one (the options
+    first)."""
     o = checked(options_of(options, keywords, caller), sampling)
     return binary_settings(o, m1, m2, chi1, chi2, f_ref, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1,
                            lambda2)

@@ -80,8 +80,8 @@ def stream(m1, m2, chi1, chi2, f_ref, *, delta_t, f_min=None, f_max=None, **keyw
     if "sampling" in keywords:
         raise TypeError("stream() got an unexpected keyword argument 'sampling' (delta_t is its sampling)")
     delta_t = _ini.seconds(delta_t, "delta_t")
-    s = settings(m1, m2, chi1, chi2, f_ref, **{**OPTIONS, **keywords, "f_min": f_min, "f_max": f_max,
-                                                "sampling": delta_t}, caller="stream")
+    s = settings(m1, m2, chi1, chi2, f_ref, "stream", **{**OPTIONS, **keywords, "f_min": f_min, "f_max": f_max,
+                                                          "sampling": delta_t})
     res_f, res_b, termination, stats = integrate(s)
     stats["wall_time_s"] = time.perf_counter() - wall0
     return Stream(s, res_f, res_b, termination, stats)
@@ -335,9 +335,9 @@ class Streamed:
 
 
 def polarizations(m1, m2, chi1, chi2, f_ref, *, inclination, distance, delta_t, phi_ref=0.0, f_min=None, f_max=None,
-                  ell_max=ELL_MAX, amplitude_order=AMPLITUDE_ORDER, memory=False, **options):
-    """(t, h₊, h×), float64 arrays: the polarizations of the binary (``pnrotor.evolve``'s parameters and
-    ``options``) seen at ``inclination`` and ``phi_ref`` (radians or astropy angles; the direction (ι, π/2 − φ_ref) of
+                  ell_max=ELL_MAX, amplitude_order=AMPLITUDE_ORDER, memory=False, **keywords):
+    """(t, h₊, h×), float64 arrays: the polarizations of the binary (``pnrotor.evolve``'s parameters; ``keywords`` its
+    other keywords, ``options`` and the fields of :class:`pnrotor.Options` among them) seen at ``inclination`` and ``phi_ref`` (radians or astropy angles; the direction (ι, π/2 − φ_ref) of
     the inertial frame, LALSuite's convention) as strain at ``distance`` (Mpc or an astropy length), at t = k
     ``delta_t`` seconds (t = 0 at f_ref, from f_min, if given, to f_max or the end of the inspiral: ``evolve``'s time
     axis with ``sampling=delta_t``), from the modes ℓ ≤ ``ell_max`` with amplitude terms through ``amplitude_order``
@@ -349,7 +349,7 @@ def polarizations(m1, m2, chi1, chi2, f_ref, *, inclination, distance, delta_t, 
     ``pnrotor.hdf5.write(path, pnrotor.stream(…).polarizations(…))``."""
     check_arguments(ell_max, amplitude_order, distance)   # before integrating
     check_memory_flag(memory)
-    p = stream(m1, m2, chi1, chi2, f_ref, delta_t=delta_t, f_min=f_min, f_max=f_max, **options).polarizations(
+    p = stream(m1, m2, chi1, chi2, f_ref, delta_t=delta_t, f_min=f_min, f_max=f_max, **keywords).polarizations(
         inclination=inclination, distance=distance, phi_ref=phi_ref, ell_max=ell_max,
         amplitude_order=amplitude_order, memory=memory).compute()
     return p.t_seconds, p.h_plus, p.h_cross
@@ -361,7 +361,8 @@ def modes(m1, *args, **kwargs):
     * ``modes(evolution, ell_max=8, amplitude_order=3.5, distance=None, tidal_order=None, memory=False)``: of the
       samples of an :class:`~pnrotor.pn.evolve.Evolution` (:func:`pnrotor.waveform.modes.modes`);
     * ``modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=8,
-      amplitude_order=3.5, memory=False, **evolve_options)``: those of ``pnrotor.modes(pnrotor.evolve(…,
+      amplitude_order=3.5, memory=False, **keywords)`` (``keywords``: evolve's other keywords, ``options`` and the fields of
+      :class:`pnrotor.Options` among them): those of ``pnrotor.modes(pnrotor.evolve(…,
       sampling=delta_t), ell_max, amplitude_order, distance, memory=memory)``, bitwise, computed in one pass from the
       integrator's dense output without forming its history."""
     if isinstance(m1, Evolution):
@@ -373,11 +374,11 @@ def modes(m1, *args, **kwargs):
 
 
 def _binary_modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=ELL_MAX,
-                  amplitude_order=AMPLITUDE_ORDER, memory=False, **options):
+                  amplitude_order=AMPLITUDE_ORDER, memory=False, **keywords):
     """:func:`modes` of a binary."""
     check_arguments(ell_max, amplitude_order, distance)
     check_memory_flag(memory)
-    return stream(m1, m2, chi1, chi2, f_ref, delta_t=delta_t, f_min=f_min, f_max=f_max, **options).modes(
+    return stream(m1, m2, chi1, chi2, f_ref, delta_t=delta_t, f_min=f_min, f_max=f_max, **keywords).modes(
         ell_max, amplitude_order, distance, memory=memory).compute()
 
 
