@@ -76,14 +76,16 @@ def add_parser(subparsers):
     model.add_argument("--approximant", help=f"{approximants.names()} (default {DEFAULTS['approximant']}; also "
                        "TaylorT4, SpinTaylorT4, ...)")
     model.add_argument("--pn-order", type=float, metavar="ORDER",
-                       help=f"PN order of the nonspinning terms, 0 ... {MAX_ORDER:g} (default {OPTION_DEFAULTS['pn_order']:g})")
+                       help=f"PN order of the nonspinning terms, 0 ... {MAX_ORDER:g} "
+                       f"(default {OPTION_DEFAULTS['pn_order']:g})")
     model.add_argument("--spin-orbit-order", type=float, metavar="ORDER",
                        help=f"PN order of the spin-orbit terms, -1 ... {MAX_SO_ORDER:g} (default min(pn-order, "
                        f"{MAX_SO_ORDER:g}); -1: none)")
     model.add_argument("--spin-spin-order", type=float, metavar="ORDER",
                        help=f"PN order of the spin-spin terms, -1 ... {MAX_SS_ORDER:g} (default min(pn-order, "
                        f"{MAX_SS_ORDER:g}); -1: none)")
-    model.add_argument("--precession", choices=PRECESSION, help=f"spin precession model (default: {OPTION_DEFAULTS['precession']})")
+    model.add_argument("--precession", choices=PRECESSION,
+                       help=f"spin precession model (default: {OPTION_DEFAULTS['precession']})")
     model.add_argument("--f-min", type=float, metavar="HZ",
                        help="also integrate backward from f_ref down to this GW frequency")
     model.add_argument("--f-max", type=float, metavar="HZ",
@@ -91,7 +93,8 @@ def add_parser(subparsers):
     model.add_argument("--sampling", metavar="S",
                        help="steps (every integrator step, default), final (only the final state), a time step in "
                        "seconds (e.g. 1/4096 or 0.000244) or per_orbit:N (N points per orbit)")
-    model.add_argument("--atol", type=float, help=f"absolute tolerance of the integrator (default {OPTION_DEFAULTS['atol']:g}; rtol {OPTION_DEFAULTS['rtol']:g})")
+    model.add_argument("--atol", type=float, help=f"absolute tolerance of the integrator (default "
+                       f"{OPTION_DEFAULTS['atol']:g}; rtol {OPTION_DEFAULTS['rtol']:g})")
     model.add_argument("--lambda1", type=float, metavar="LAMBDA",
                        help="dimensionless tidal deformability of body 1 (as LALSuite's lambda1; default 0)")
     model.add_argument("--lambda2", type=float, metavar="LAMBDA",

@@ -102,8 +102,9 @@ def is_frame(x):
 def from_frame(frame, given, f_end, frequencies, shared, lambdas):
     """evolve_many's per-binary inputs from a DataFrame with a batch table's columns (evolve_many's docstring) →
     (m1, m2, chi1, chi2, f_ref, f_end, backward: where the target is an f_min, or None, lambda1, lambda2: the
-    columns, or where absent the values ``lambdas`` gives); the options its columns hold go into ``shared`` (the fields of the call's :class:`pnrotor.Options`, by name).  A
-    ValueError names the column (and row) that does not fit."""
+    columns, or where absent the values ``lambdas`` gives); the options its columns hold go into ``shared`` (the
+    fields of the call's :class:`pnrotor.Options`, by name).  A ValueError names the column (and row) that does not
+    fit."""
     from pandas.api.types import is_bool_dtype, is_numeric_dtype
 
     twice = [name for name, x in given.items() if x is not None]

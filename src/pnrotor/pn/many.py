@@ -278,7 +278,8 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
     backward = None   # a binary's target behind f_ref (f_min): by default where it lies below f_ref
     if is_frame(m1):
         frame = m1
-        called = {**OPTION_DEFAULTS, **(dataclasses.asdict(options) if isinstance(options, Options) else {}), **keywords}
+        fields = dataclasses.asdict(options) if isinstance(options, Options) else {}
+        called = {**OPTION_DEFAULTS, **fields, **keywords}   # the call's options by name, for the frame's to agree
         m1, m2, chi1, chi2, f_ref, f_end, backward, lambda1, lambda2 = from_frame(
             frame, dict(m2=m2, chi1=chi1, chi2=chi2, f_ref=f_ref), f_end, frequencies, called,
             dict(lambda1=lambda1, lambda2=lambda2))

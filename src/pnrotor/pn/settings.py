@@ -6,10 +6,10 @@ units (G = c = M = 1, :mod:`pnrotor.pn.initial`): v at f_ref, f_min and f_max, t
 (x̂, ŷ, ẑ) → (n̂, λ̂, ℓ̂), the mass ratio, the PN orders with their defaults, and the spin content
 (nonspinning, aligned or precessing) that decides which right-hand side is compiled in.  It does so in
 two parts: :func:`checked` (the model and integration options, a :class:`pnrotor.Options`, and the sampling, which
-the binaries of ``evolve_many`` share and it checks once) and :func:`binary_settings` (the binary); :func:`population_settings` does the second for
-arrays of binaries at once (bitwise the same numbers), leaving the binaries it does not pass to
-binary_settings.  Every bad input is a ``ValueError`` naming the parameter and its allowed range.  No numba
-here: the later stages (:mod:`pnrotor.pn.evolve`, :mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
+the binaries of ``evolve_many`` share and it checks once) and :func:`binary_settings` (the binary);
+:func:`population_settings` does the second for arrays of binaries at once (bitwise the same numbers), leaving the
+binaries it does not pass to binary_settings.  Every bad input is a ``ValueError`` naming the parameter and its
+allowed range.  No numba here: the later stages (:mod:`pnrotor.pn.evolve`, :mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
 """
 
 import functools

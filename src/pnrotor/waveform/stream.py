@@ -337,8 +337,9 @@ class Streamed:
 def polarizations(m1, m2, chi1, chi2, f_ref, *, inclination, distance, delta_t, phi_ref=0.0, f_min=None, f_max=None,
                   ell_max=ELL_MAX, amplitude_order=AMPLITUDE_ORDER, memory=False, **keywords):
     """(t, h₊, h×), float64 arrays: the polarizations of the binary (``pnrotor.evolve``'s parameters; ``keywords`` its
-    other keywords, ``options`` and the fields of :class:`pnrotor.Options` among them) seen at ``inclination`` and ``phi_ref`` (radians or astropy angles; the direction (ι, π/2 − φ_ref) of
-    the inertial frame, LALSuite's convention) as strain at ``distance`` (Mpc or an astropy length), at t = k
+    other keywords, ``options`` and the fields of :class:`pnrotor.Options` among them) seen at ``inclination`` and
+    ``phi_ref`` (radians or astropy angles; the direction (ι, π/2 − φ_ref) of the inertial frame, LALSuite's
+    convention) as strain at ``distance`` (Mpc or an astropy length), at t = k
     ``delta_t`` seconds (t = 0 at f_ref, from f_min, if given, to f_max or the end of the inspiral: ``evolve``'s time
     axis with ``sampling=delta_t``), from the modes ℓ ≤ ``ell_max`` with amplitude terms through ``amplitude_order``
     (and the run's tidal terms; with ``memory``, the nonlinear memory: :func:`pnrotor.modes`).
@@ -361,8 +362,8 @@ def modes(m1, *args, **kwargs):
     * ``modes(evolution, ell_max=8, amplitude_order=3.5, distance=None, tidal_order=None, memory=False)``: of the
       samples of an :class:`~pnrotor.pn.evolve.Evolution` (:func:`pnrotor.waveform.modes.modes`);
     * ``modes(m1, m2, chi1, chi2, f_ref, *, delta_t, distance=None, f_min=None, f_max=None, ell_max=8,
-      amplitude_order=3.5, memory=False, **keywords)`` (``keywords``: evolve's other keywords, ``options`` and the fields of
-      :class:`pnrotor.Options` among them): those of ``pnrotor.modes(pnrotor.evolve(…,
+      amplitude_order=3.5, memory=False, **keywords)`` (``keywords``: evolve's other keywords, ``options`` and the
+      fields of :class:`pnrotor.Options` among them): those of ``pnrotor.modes(pnrotor.evolve(…,
       sampling=delta_t), ell_max, amplitude_order, distance, memory=memory)``, bitwise, computed in one pass from the
       integrator's dense output without forming its history."""
     if isinstance(m1, Evolution):
