@@ -95,8 +95,9 @@ def time_batch(tasks, mode, jobs=1, context=None):
     return elapsed, results
 
 
-def durability(tasks, csv_path, folder, rounds):
-    """Wall times of a batch and of ways to write its runs (module docstring), interleaved, medians."""
+def durability(tasks, csv_path, folder, rounds, samples):
+    """Wall times of a batch (of ``samples`` samples in all) and of ways to write its runs (module docstring),
+    interleaved, medians."""
     import shutil
 
     import h5py
@@ -166,7 +167,6 @@ def durability(tasks, csv_path, folder, rounds):
                 reads["one file"].append(timed(read_all))
             elif way.startswith("part files + external"):
                 reads["external links"].append(timed(read_all))
-    samples = sum(len(run) for run in computed(1).values())
     print(f"\ndurability: {len(tasks)} runs sampled at 1/4096 s, {samples} samples, {rounds} interleaved rounds, "
           "medians (all rounds, s)")
     median = {way: statistics.median(values) for way, values in times.items()}
@@ -216,7 +216,7 @@ def main():
         samples = sum(len(r) for _, _, r in reference)
         evolve_s = sum(r.stats["wall_time_s"] for _, _, r in reference)
         if args.durability and not isinstance(sampling, str):
-            durability(tasks, csv_path, folder, args.rounds)
+            durability(tasks, csv_path, folder, args.rounds, samples)
         times = {config: [] for config in configs}
         for _ in range(args.rounds):
             for config in configs:
