@@ -39,6 +39,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
+import report
 from pnrotor import batch, hdf5, threads
 from pnrotor.batch import population
 from pnrotor.batch.table import TableFile
@@ -47,8 +48,7 @@ from pnrotor.pn.many import evolve_many
 
 F_REF, F_MAX, M_TOTAL = 20.0, 100.0, 40.0
 MATCHED = dict(approximant="T4", pn_order=3.5, spin_orbit_order=1.5, spin_spin_order=2.0, precession="averaged")
-DOCS = Path(__file__).resolve().parents[1] / "docs" / "performance.md"
-BEGIN, END = "<!-- bench_population.py: begin -->", "<!-- bench_population.py: end -->"
+DOCS = report.DOCS
 
 
 def binaries(n, seed=35):
@@ -301,16 +301,11 @@ def _duration(seconds):
 
 
 def write_docs(lines):
-    """Replace the Populations section's numbers in docs/performance.md (made if absent)."""
+    """Replace the Populations section's numbers in docs/performance.md (made if absent), as report.py does."""
     text = DOCS.read_text() if DOCS.exists() else (
         "# Performance\n\nMeasured numbers, each section written by the benchmark it names (do not edit them by "
         "hand: run the benchmark).\n")
-    block = f"{BEGIN}\n" + "\n".join(lines) + f"\n{END}"
-    if BEGIN in text:
-        text = text[:text.index(BEGIN)] + block + text[text.index(END) + len(END):]
-    else:
-        text = text.rstrip("\n") + "\n\n## Populations\n\n" + block + "\n"
-    DOCS.write_text(text)
+    DOCS.write_text(report.write(text, "bench_population.py", lines))
 
 
 def main():
