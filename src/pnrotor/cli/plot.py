@@ -60,7 +60,7 @@ def run(args):
     results = [(group, hdf5.read(args.file, group)) for group in evolve_groups(args.file, args.group)]
     for group, result in results:
         _check_drawable(args.file, result)
-    heights = [_height(result) for _, result in results]
+    heights, draws = zip(*(_panel(result) for _, result in results))
     figure = Figure(figsize=(12, sum(heights)), layout="constrained")
     title = args.file if args.group in (None, "/") else f"{args.file} run {args.group!r}"
     figure.suptitle(f"{title}: " + ", ".join(f"{type(result).__name__}" + (f" ({group})" if len(results) > 1 else "")
@@ -68,8 +68,8 @@ def run(args):
     panels = figure.subfigures(len(results), 1, height_ratios=heights) if len(results) > 1 else [figure]
     with warnings.catch_warnings(record=True) as caught:   # each on one line, as pnrotor evolve prints them
         warnings.simplefilter("always")
-        for panel, (_, result) in zip(panels, results):
-            _draw(panel, result, args)
+        for panel, draw in zip(panels, draws):
+            draw(panel, args)
     for warning in caught:
         print(f"pnrotor plot: warning: {warning.message}", file=sys.stderr)
     with replaced_on_success(output) as temporary:
@@ -93,26 +93,17 @@ def _post_newtonian_run(result):
     return all(hasattr(result, name) for name in ("ell_hat", "v", "chi1", "chi2"))
 
 
-def _height(result):
-    """The figure height in inches for `result`'s panels (the paper's binary adds a row for δ(t))."""
-    kind = type(result).__name__
-    if kind == "Polarizations":
-        return 4.5
-    if kind == "Modes" or _post_newtonian_run(result) or _binary(result) is None:
-        return 8.5
-    return 12.5
-
-
-def _draw(figure, result, args):
+def _panel(result):
+    """(height in inches, draw(figure, args)) of `result`'s panels (the paper's binary adds a row for δ(t))."""
     kind = type(result).__name__
     if kind == "Modes":
-        _modes(figure, result, args.inclination, args.phi_ref)
-    elif kind == "Polarizations":
-        _polarizations(figure.add_subplot(1, 1, 1), result)
-    elif _post_newtonian_run(result):
-        _post_newtonian(figure, result)
-    else:
-        _frame_history(figure, result, _binary(result))
+        return 8.5, lambda figure, args: _modes(figure, result, args.inclination, args.phi_ref)
+    if kind == "Polarizations":
+        return 4.5, lambda figure, args: _polarizations(figure.add_subplot(1, 1, 1), result)
+    if _post_newtonian_run(result):
+        return 8.5, lambda figure, args: _post_newtonian(figure, result)
+    binary = _binary(result)
+    return 8.5 if binary is None else 12.5, lambda figure, args: _frame_history(figure, result, binary)
 
 
 def _default_output(file, group):
