@@ -46,7 +46,7 @@ from pnrotor.batch import TABLE, InterruptFlag, Outcome, backends, check_output,
 from pnrotor.batch import Plan as _BatchPlan
 from pnrotor.batch.table import Row, TableFile, parse_row
 from pnrotor.options import TABLE_OPTIONS
-from pnrotor.results.populations import STATE, PopulationTable
+from pnrotor.results.populations import FIELDS, STATE, PopulationTable
 
 __all__ = ["PopulationTable", "Plan", "plan", "run", "unsupported", "compute_chunk", "SHARED", "CHUNK"]
 
@@ -55,10 +55,6 @@ CHUNK = 10_000
 
 SHARED = TABLE_OPTIONS
 """The table's columns that `evolve_many` takes as shared by all its binaries: one call per combination."""
-
-FIELDS = STATE + ("termination", "reached", "message", "nsteps", "nfev")
-"""The array fields of `pnrotor.Population` that a :class:`PopulationTable` keeps, row by row."""
-
 
 def unsupported(params):
     """Why this mode cannot compute a row of `pnrotor.evolve` keywords (a message naming the column), or None."""
@@ -218,13 +214,6 @@ class Plan(_BatchPlan):
     def tasks(self):
         """The chunks' numbers, from 0."""
         return range(-(-self.table.rows // self.chunk))
-
-    @property
-    def where(self):
-        if self.scheduler is not None:
-            return f"Dask scheduler {self.scheduler}"
-        jobs = min(self.jobs, len(self.tasks))
-        return "this process" if jobs == 1 else f"{jobs} worker processes"
 
     def _run(self, start, progress):
         from pnrotor import hdf5

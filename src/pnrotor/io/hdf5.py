@@ -133,17 +133,16 @@ def _streamed(run):
     return not dataclasses.is_dataclass(run) and callable(getattr(run, "block", None))
 
 
-def image(run, *, compression=None, checksum=True):
-    """The bytes of the file `write` would write for the run dataclass `run` (checked as it checks it), built in
-    memory: for a process that computes a run and hands it to another to store (a population's chunks)."""
+def image(run):
+    """The bytes of the file `write` would write for the run dataclass `run` (checked as it checks it; no compression,
+    checksums on), built in memory: for a process that computes a run and hands it to another to store (a population's
+    chunks)."""
     import io
 
     _check_run(run)
-    _check_compression(compression)
-    _check_checksum(checksum)
     buffer = io.BytesIO()
     with h5py.File(buffer, "w", libver=("v110", "v110")) as f:
-        _put_run(f, run, compression, checksum)
+        _put_run(f, run, None, True)
     return buffer.getvalue()
 
 
@@ -286,10 +285,7 @@ class Journaled:
 
     def names(self):
         """The runs in the file (its top-level groups), sorted."""
-        if not self._committed:
-            return []
-        with opened(self.path) as f:
-            return run_names(f)
+        return list_runs(self.path) if self._committed else []
 
     def add(self, runs):
         """Write the runs {name: run dataclass} (checked first as `write` checks them), in one commit."""

@@ -58,7 +58,7 @@ from .sampling import fill_history, output_mode
 from .settings import Binaries, binary_settings, checked, population_settings, target_v
 from .inputs import from_frame, is_frame, per_binary, population_size, target_table
 from .layout import EV_V_END, N_EVENTS, P_VEND
-from pnrotor.results.populations import INSPIRAL_ENDS, STATE, Population, spin_angles
+from pnrotor.results.populations import FIELDS, INSPIRAL_ENDS, STATE, Population, spin_angles
 
 __all__ = ["evolve_many", "Population", "spin_angles", "INSPIRAL_ENDS"]
 
@@ -457,7 +457,7 @@ def evolve_many(m1, m2=None, chi1=None, chi2=None, f_ref=None, *, f_end=None, fr
         out.stopped_at[name] = x.copy()   # (the dict was `state`, the states' arrays themselves)
         x[~out.reached] = np.nan
     if listed:
-        for name in STATE + ("termination", "reached", "message", "nsteps", "nfev"):
+        for name in FIELDS:
             x = getattr(out, name)
             setattr(out, name, x.reshape((n, K) + x.shape[1:]))
         for name, x in out.stopped_at.items():

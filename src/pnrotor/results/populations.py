@@ -17,6 +17,9 @@ INSPIRAL_ENDS = ("v_max", "energy_balance", "vdot_nonpositive", "vdot_peak", "vd
 
 STATE = ("t", "t_seconds", "v", "Phi", "chi1", "chi2", "R", "ell_hat")
 """The fields of a :class:`Population` that hold a state (NaN where the target was not reached)."""
+FIELDS = STATE + ("termination", "reached", "message", "nsteps", "nfev")
+"""The array fields of a :class:`Population`, one entry per binary (and target): what a :class:`PopulationTable`
+keeps, row by row."""
 
 
 def spin_angles(chi1, chi2, ell_hat, m1, m2):
@@ -105,7 +108,7 @@ class SpinAngles:
                 add("frequency_Hz", value)
             else:
                 add(key + "_ref" * (value.ndim == 2), value, True)
-        for key in STATE + ("termination", "reached", "message", "nsteps", "nfev"):
+        for key in FIELDS:
             add(key, getattr(self, key))
         for key, value in self.derived().items():
             add(key, value)
