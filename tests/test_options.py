@@ -165,3 +165,13 @@ def test_the_internal_caller_name_is_no_keyword():
         pnrotor.stream(*BINARY, delta_t=1 / 1024, caller="x")
     with pytest.raises(TypeError, match="evolve_many\\(\\) missing m2"):
         pnrotor.evolve_many(30.0, pn_order=9)
+
+
+def test_settings_hold_the_checked_options_in_their_order():
+    """Settings are built with the Checked options spread by position: their fields from ``approximant`` on are
+    Checked's, which are Options' and then the sampling."""
+    from pnrotor.pn.settings import Checked, Settings
+    names = [field.name for field in dataclasses.fields(Settings)]
+    start = names.index("approximant")
+    assert tuple(names[start:start + len(Checked._fields)]) == Checked._fields
+    assert Checked._fields == (*options_module.OPTION_DEFAULTS, "sampling", "sampling_value")

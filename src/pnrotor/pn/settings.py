@@ -9,9 +9,11 @@ two parts: :func:`checked` (the model and integration options, a :class:`pnrotor
 the binaries of ``evolve_many`` share and it checks once) and :func:`binary_settings` (the binary);
 :func:`population_settings` does the second for arrays of binaries at once (bitwise the same numbers), leaving the
 binaries it does not pass to binary_settings.  Every bad input is a ``ValueError`` naming the parameter and its
-allowed range.  No numba here: the later stages (:mod:`pnrotor.pn.evolve`, :mod:`pnrotor.pn.sampling`) take a :class:`Settings`.
+allowed range.  No numba here: the later stages (:mod:`pnrotor.pn.evolve`, :mod:`pnrotor.pn.sampling`) take a
+:class:`Settings`.
 """
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -20,7 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import values
-from ..options import options_of
+from ..options import Options, options_of
 from . import initial as _ini
 
 MAX_MASS_RATIO = 1e6
@@ -107,26 +109,11 @@ class Settings:
         }
 
 
-class Checked(NamedTuple):
-    """A run's options as it uses them: :attr:`pnrotor.Options.resolved` and the parsed sampling (mode, value) — what
-    the binaries of ``evolve_many`` share.  Fields as in :class:`Settings` (a NamedTuple: a frozen dataclass cost ~2 µs
-    more per run to build)."""
-
-    approximant: str
-    pn_order: float
-    spin_orbit_order: float
-    spin_spin_order: float
-    atol: float
-    rtol: float
-    rotor: str
-    precession_phase_shift: bool
-    integrate_rotor: bool
-    precession: str
-    max_steps: int
-    tidal_order: float
-    horizon_absorption: bool
-    sampling: str
-    sampling_value: float
+Checked = NamedTuple("Checked", [(field.name, field.type) for field in dataclasses.fields(Options)]
+                     + [("sampling", str), ("sampling_value", float)])
+Checked.__doc__ = """A run's options as it uses them: the fields of :class:`pnrotor.Options`, with the values of
+:attr:`pnrotor.Options.resolved`, then the parsed sampling (mode, value) — what the binaries of ``evolve_many`` share.
+Fields as in :class:`Settings` (a NamedTuple: a frozen dataclass cost ~2 µs more per run to build)."""
 
 
 def settings(m1, m2, chi1, chi2, f_ref, caller="evolve", /, *, f_min, f_max, ell_hat, n_hat, kappa1, kappa2, lambda1,
