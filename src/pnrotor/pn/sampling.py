@@ -209,7 +209,7 @@ def fill_history(mode, seg_t, seg_h, coef, tq, reverse, Y, R0, ell0, c1, c2, off
     """
     dense = tq.size > 0
     nrow = tq.size if dense else Y.shape[0]
-    n = coef.shape[2] if dense else Y.shape[1]
+    n = min(coef.shape[2] if dense else Y.shape[1], layout.N_PRECESSING)   # not the masses: none is stored
     y = np.empty((n, _BLOCK))
     cs = np.empty((2, _BLOCK))
     if not dense:
